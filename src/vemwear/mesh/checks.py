@@ -1,0 +1,143 @@
+"""Validity checks of a mesh, each raising :class:`MeshError` that names cells or vertices."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from .polymesh import PARTS, Mesh, MeshError, part_code
+
+_SHOW = 10
+
+
+def _ids(a: NDArray) -> str:
+    a = np.asarray(a).ravel()
+    more = f" and {a.size - _SHOW} more" if a.size > _SHOW else ""
+    return f"{a[:_SHOW].tolist()}{more}"
+
+
+def _scale(mesh: Mesh) -> float:
+    ext = mesh.points.max(axis=0) - mesh.points.min(axis=0)
+    return float(max(np.max(ext), np.finfo(float).tiny))
+
+
+def check_cells(mesh: Mesh, rtol: float = 1e-12) -> None:
+    """Cells are counter-clockwise, non-degenerate, simple, with distinct vertices."""
+    for n, (ids, verts) in mesh.groups.items():
+        s = np.sort(verts, axis=1)
+        rep = np.any(s[:, 1:] == s[:, :-1], axis=1)
+        if np.any(rep):
+            raise MeshError(f"cells {_ids(ids[rep])} list a vertex twice")
+    area = mesh.cell_areas
+    tiny = rtol * mesh.cell_diameters**2
+    if np.any(np.abs(area) <= tiny):
+        raise MeshError(f"cells {_ids(np.flatnonzero(np.abs(area) <= tiny))} are degenerate (zero area)")
+    if np.any(area < 0):
+        raise MeshError(
+            f"cells {_ids(np.flatnonzero(area < 0))} are clockwise; cells must be counter-clockwise"
+        )
+    check_simple(mesh)
+
+
+def check_simple(mesh: Mesh) -> None:
+    """No cell boundary crosses itself (all pairs of non-adjacent edges are disjoint)."""
+    for n, (ids, verts) in mesh.groups.items():
+        if n < 4:
+            continue
+        X = mesh.points[verts]  # (m, n, 2)
+        A, B = X, np.roll(X, -1, axis=1)
+        i, j = np.triu_indices(n, k=2)
+        keep = ~((i == 0) & (j == n - 1))  # first and last edges are adjacent
+        i, j = i[keep], j[keep]
+        p, r = A[:, i], B[:, i] - A[:, i]
+        q, s = A[:, j], B[:, j] - A[:, j]
+        rxs = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
+        qp = q - p
+        t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0])
+        u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t, u = t / rxs, u / rxs
+        eps = 1e-12
+        cross = (np.abs(rxs) > 0) & (t >= -eps) & (t <= 1 + eps) & (u >= -eps) & (u <= 1 + eps)
+        bad = np.any(cross, axis=1)
+        if np.any(bad):
+            raise MeshError(f"cells {_ids(ids[bad])} are not simple polygons (their edges cross)")
+
+
+def check_vertices(mesh: Mesh, rtol: float = 1e-10) -> None:
+    """No two vertices coincide and every vertex belongs to a cell."""
+    used = np.zeros(mesh.n_points, dtype=bool)
+    used[mesh.cell_vertices] = True
+    if not np.all(used):
+        raise MeshError(f"vertices {_ids(np.flatnonzero(~used))} belong to no cell (dangling)")
+    pairs = cKDTree(mesh.points).query_pairs(rtol * _scale(mesh), output_type="ndarray")
+    if len(pairs):
+        raise MeshError(f"duplicate vertices (same coordinates): pairs {_ids(pairs[:, :2])}")
+
+
+def check_conforming(mesh: Mesh, rtol: float = 1e-9) -> None:
+    """Every interior edge is shared by exactly two cells with opposite orientation.
+
+    A vertex that lies inside an edge of a cell must be a vertex of that cell too
+    (a hanging node is a plain vertex of all cells around it).
+    """
+    de = mesh.directed_edges
+    n = mesh.n_points
+    key = de[:, 0] * n + de[:, 1]
+    uniq, counts = np.unique(key, return_counts=True)
+    if np.any(counts > 1):
+        k = uniq[counts > 1]
+        rows = np.flatnonzero(np.isin(key, k))
+        raise MeshError(
+            f"cells {_ids(np.unique(mesh.edge_cells[rows]))} overlap: they share an edge "
+            "with the same orientation"
+        )
+    be = mesh.boundary_edges
+    bv = np.unique(be)
+    if len(be) == 0:
+        raise MeshError("the mesh has no boundary edges")
+    a, b = mesh.points[be[:, 0]], mesh.points[be[:, 1]]
+    mid, half = 0.5 * (a + b), 0.5 * np.linalg.norm(b - a, axis=1)
+    tree = cKDTree(mesh.points[bv])
+    tol = rtol * _scale(mesh)
+    hits = tree.query_ball_point(mid, half * (1 - 1e-9))
+    for e, cand in enumerate(hits):  # few candidates per edge; only boundary edges
+        if not cand:
+            continue
+        c = bv[np.asarray(cand)]
+        c = c[(c != be[e, 0]) & (c != be[e, 1])]
+        if c.size == 0:
+            continue
+        d = b[e] - a[e]
+        r = mesh.points[c] - a[e]
+        dist = np.abs(r[:, 0] * d[1] - r[:, 1] * d[0]) / (2 * half[e])
+        if np.any(dist <= tol):
+            v = c[dist <= tol][0]
+            cell = mesh.boundary_edge_cells[e]
+            raise MeshError(
+                f"non-conforming edge ({be[e, 0]}, {be[e, 1]}) of cell {cell}: vertex {v} lies "
+                "on it but is not a vertex of that cell (add hanging nodes to the cell's list)"
+            )
+
+
+def check_boundary(mesh: Mesh, require: tuple[str, ...] = ("clamped",)) -> None:
+    """Every boundary edge is tagged and the required parts are present."""
+    untagged = np.flatnonzero(mesh.boundary_tags == 0)
+    if untagged.size:
+        e = mesh.boundary_edges[untagged]
+        raise MeshError(
+            f"{untagged.size} boundary edges have no boundary part, e.g. edges "
+            f"{_ids(e[:3].tolist())} (vertex ids); tag them as one of {', '.join(PARTS)}"
+        )
+    for name in require:
+        if not np.any(mesh.boundary_tags == part_code(name)):
+            raise MeshError(f"the mesh has no {name!r} boundary edges")
+
+
+def check_mesh(mesh: Mesh, require: tuple[str, ...] = ("clamped",)) -> None:
+    """Run every check: vertices, cells, conformity and boundary parts."""
+    check_vertices(mesh)
+    check_cells(mesh)
+    check_conforming(mesh)
+    check_boundary(mesh, require)

@@ -1,0 +1,68 @@
+"""Structured meshes of a rectangle: squares (quadrilaterals) and triangles."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .polymesh import Mesh
+
+
+def _grid(size: tuple[float, float], divisions: tuple[int, int], origin: tuple[float, float]):
+    nx, ny = (int(d) for d in divisions)
+    if nx < 1 or ny < 1:
+        raise ValueError(f"divisions must be positive integers, got {divisions}")
+    lx, ly = (float(s) for s in size)
+    if lx <= 0 or ly <= 0:
+        raise ValueError(f"size must be positive, got {size}")
+    x = origin[0] + np.linspace(0.0, lx, nx + 1)
+    y = origin[1] + np.linspace(0.0, ly, ny + 1)
+    X, Y = np.meshgrid(x, y)  # row j = y_j
+    points = np.column_stack([X.ravel(), Y.ravel()])
+    i, j = np.meshgrid(np.arange(nx), np.arange(ny))
+    v00 = (j * (nx + 1) + i).ravel()
+    return points, v00, v00 + 1, v00 + nx + 2, v00 + nx + 1
+
+
+def rectangle_squares(
+    size: tuple[float, float] = (2.0, 1.0),
+    divisions: tuple[int, int] = (32, 16),
+    origin: tuple[float, float] = (0.0, 0.0),
+) -> Mesh:
+    """Rectangle split into ``nx * ny`` axis-aligned rectangles (counter-clockwise).
+
+    The boundary is untagged; use :meth:`Mesh.with_boundary` or
+    :func:`vemwear.mesh.boundary.tag_rectangle`.
+    """
+    points, a, b, c, d = _grid(size, divisions, origin)
+    return Mesh.from_cells(points, np.column_stack([a, b, c, d]))
+
+
+def rectangle_triangles(
+    size: tuple[float, float] = (2.0, 1.0),
+    divisions: tuple[int, int] = (32, 16),
+    origin: tuple[float, float] = (0.0, 0.0),
+    diagonal: str = "right",
+) -> Mesh:
+    """Rectangle split into ``2 * nx * ny`` triangles.
+
+    ``diagonal="right"`` cuts every square from lower-left to upper-right,
+    ``"left"`` from lower-right to upper-left, ``"alternate"`` mixes both in a
+    checkerboard (the union-jack-like pattern).
+    """
+    points, a, b, c, d = _grid(size, divisions, origin)
+    right = np.column_stack([a, b, c]), np.column_stack([a, c, d])
+    left = np.column_stack([a, b, d]), np.column_stack([b, c, d])
+    if diagonal == "right":
+        t1, t2 = right
+    elif diagonal == "left":
+        t1, t2 = left
+    elif diagonal == "alternate":
+        nx = int(divisions[0])
+        i = np.arange(len(a)) % nx
+        j = np.arange(len(a)) // nx
+        use_left = ((i + j) % 2 == 1)[:, None]
+        t1 = np.where(use_left, left[0], right[0])
+        t2 = np.where(use_left, left[1], right[1])
+    else:
+        raise ValueError(f"diagonal must be 'right', 'left' or 'alternate', got {diagonal!r}")
+    return Mesh.from_cells(points, np.vstack([t1, t2]))

@@ -1,0 +1,292 @@
+"""The polygonal mesh type.
+
+A mesh is a set of vertices and of simple polygons (cells) listed
+counter-clockwise by vertex index, with any number of vertices per cell.
+A hanging node is simply a vertex of every cell whose boundary passes through it,
+so the mesh is always conforming in the virtual element sense (paper, Remark 4.9).
+
+Boundary edges are the directed cell edges whose reverse does not occur in another
+cell; they keep the orientation of their cell, so their outward normal is the edge
+direction turned clockwise. Each boundary edge carries the code of one boundary
+part: ``clamped`` (Gamma_D), ``traction`` (Gamma_N) or ``contact`` (Gamma_C).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+#: Names of the boundary parts, in the order of their integer codes 1, 2, 3.
+PARTS: tuple[str, ...] = ("clamped", "traction", "contact")
+UNTAGGED = 0
+
+
+def part_code(name: str) -> int:
+    """Integer code of a boundary part name (``clamped`` -> 1, ...)."""
+    try:
+        return PARTS.index(name) + 1
+    except ValueError:
+        raise ValueError(
+            f"unknown boundary part {name!r}; the parts are {', '.join(PARTS)}"
+        ) from None
+
+
+class MeshError(ValueError):
+    """A mesh that is not valid for the method; the message names cells or vertices."""
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """Polygonal mesh with tagged boundary edges.
+
+    Parameters
+    ----------
+    points : (n_points, 2) float array
+        Vertex coordinates.
+    cell_offsets : (n_cells + 1,) int array
+        Cell ``k`` has vertices ``cell_vertices[cell_offsets[k]:cell_offsets[k + 1]]``.
+    cell_vertices : int array
+        Concatenated counter-clockwise vertex lists of the cells.
+    boundary_tags : (n_boundary_edges,) int array, optional
+        Part code (see :data:`PARTS`) of every boundary edge, in the order of
+        :attr:`boundary_edges`; 0 marks an untagged edge.
+    """
+
+    points: NDArray[np.float64]
+    cell_offsets: NDArray[np.int64]
+    cell_vertices: NDArray[np.int64]
+    boundary_tags: NDArray[np.int8] | None = field(default=None)
+
+    def __post_init__(self) -> None:
+        pts = np.ascontiguousarray(self.points, dtype=np.float64)
+        off = np.ascontiguousarray(self.cell_offsets, dtype=np.int64)
+        cv = np.ascontiguousarray(self.cell_vertices, dtype=np.int64)
+        if pts.ndim != 2 or pts.shape[1] != 2:
+            raise MeshError(f"points must have shape (n, 2), got {pts.shape}")
+        if not np.all(np.isfinite(pts)):
+            bad = np.flatnonzero(~np.all(np.isfinite(pts), axis=1))
+            raise MeshError(f"vertices {bad[:10].tolist()} have non-finite coordinates")
+        if off.ndim != 1 or off.size < 2 or off[0] != 0 or off[-1] != cv.size:
+            raise MeshError("cell_offsets must start at 0 and end at len(cell_vertices)")
+        sizes = np.diff(off)
+        if np.any(sizes < 3):
+            bad = np.flatnonzero(sizes < 3)
+            raise MeshError(f"cells {bad[:10].tolist()} have fewer than 3 vertices")
+        if cv.size and (cv.min() < 0 or cv.max() >= len(pts)):
+            bad = np.flatnonzero((cv < 0) | (cv >= len(pts)))
+            cells = np.searchsorted(off, bad, side="right") - 1
+            raise MeshError(
+                f"cells {np.unique(cells)[:10].tolist()} refer to vertex ids outside 0..{len(pts) - 1}"
+            )
+        object.__setattr__(self, "points", pts)
+        object.__setattr__(self, "cell_offsets", off)
+        object.__setattr__(self, "cell_vertices", cv)
+        for arr in (pts, off, cv):
+            arr.setflags(write=False)
+        tags = self.boundary_tags
+        nb = len(self.boundary_edges)
+        if tags is None:
+            tags = np.zeros(nb, dtype=np.int8)
+        tags = np.ascontiguousarray(tags, dtype=np.int8)
+        if tags.shape != (nb,):
+            raise MeshError(f"boundary_tags must have shape ({nb},), got {tags.shape}")
+        if np.any((tags < 0) | (tags > len(PARTS))):
+            raise MeshError(f"boundary_tags must be codes 0..{len(PARTS)}")
+        tags.setflags(write=False)
+        object.__setattr__(self, "boundary_tags", tags)
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_cells(
+        cls,
+        points: ArrayLike,
+        cells: Sequence[Sequence[int]] | NDArray[np.int64],
+        boundary_tags: ArrayLike | None = None,
+    ) -> Mesh:
+        """Build a mesh from a list of vertex-index lists (or an (n_cells, n) array)."""
+        if isinstance(cells, np.ndarray) and cells.ndim == 2:
+            sizes = np.full(len(cells), cells.shape[1], dtype=np.int64)
+            flat = cells.reshape(-1)
+        else:
+            sizes = np.array([len(c) for c in cells], dtype=np.int64)
+            flat = (
+                np.concatenate([np.asarray(c, dtype=np.int64) for c in cells])
+                if len(cells)
+                else np.zeros(0, np.int64)
+            )
+        offsets = np.concatenate([[0], np.cumsum(sizes)])
+        tags = None if boundary_tags is None else np.asarray(boundary_tags)
+        return cls(np.asarray(points, dtype=float), offsets, flat, tags)
+
+    # ------------------------------------------------------------------ sizes
+    @property
+    def n_points(self) -> int:
+        return len(self.points)
+
+    @property
+    def n_cells(self) -> int:
+        return len(self.cell_offsets) - 1
+
+    @cached_property
+    def cell_sizes(self) -> NDArray[np.int64]:
+        """Number of vertices of every cell."""
+        return np.diff(self.cell_offsets)
+
+    def cell(self, k: int) -> NDArray[np.int64]:
+        """Vertex ids of cell ``k`` (counter-clockwise)."""
+        return self.cell_vertices[self.cell_offsets[k] : self.cell_offsets[k + 1]]
+
+    @property
+    def cells(self) -> list[NDArray[np.int64]]:
+        """Vertex-id lists of all cells (a Python list; for I/O, not hot paths)."""
+        return np.split(self.cell_vertices, self.cell_offsets[1:-1])
+
+    @cached_property
+    def groups(self) -> dict[int, tuple[NDArray[np.int64], NDArray[np.int64]]]:
+        """Cells batched by vertex count: ``{n: (cell_ids, (m, n) vertex ids)}``."""
+        out: dict[int, tuple[NDArray[np.int64], NDArray[np.int64]]] = {}
+        sizes = self.cell_sizes
+        for n in np.unique(sizes):
+            ids = np.flatnonzero(sizes == n)
+            idx = self.cell_offsets[ids][:, None] + np.arange(n)[None, :]
+            out[int(n)] = (ids, self.cell_vertices[idx])
+        return out
+
+    # ------------------------------------------------------------------ edges
+    @cached_property
+    def directed_edges(self) -> NDArray[np.int64]:
+        """All cell edges (a, b) in cell orientation, cell by cell; shape (sum n_K, 2)."""
+        nxt = np.arange(1, self.cell_vertices.size + 1)
+        last = self.cell_offsets[1:] - 1
+        nxt[last] = self.cell_offsets[:-1]
+        return np.column_stack([self.cell_vertices, self.cell_vertices[nxt]])
+
+    @cached_property
+    def edge_cells(self) -> NDArray[np.int64]:
+        """Cell id of every row of :attr:`directed_edges`."""
+        return np.repeat(np.arange(self.n_cells), self.cell_sizes)
+
+    @cached_property
+    def _boundary_rows(self) -> NDArray[np.int64]:
+        de = self.directed_edges
+        n = max(self.n_points, 1)
+        fwd = de[:, 0] * n + de[:, 1]
+        rev = de[:, 1] * n + de[:, 0]
+        is_boundary = ~np.isin(fwd, rev)
+        rows = np.flatnonzero(is_boundary)
+        # a canonical order (by first vertex, then second) makes tags reproducible
+        order = np.lexsort((de[rows, 1], de[rows, 0]))
+        return rows[order]
+
+    @cached_property
+    def boundary_edges(self) -> NDArray[np.int64]:
+        """Boundary edges (a, b) oriented as in their cell (outward normal on the right)."""
+        return self.directed_edges[self._boundary_rows]
+
+    @cached_property
+    def boundary_edge_cells(self) -> NDArray[np.int64]:
+        """The cell owning each boundary edge."""
+        return self.edge_cells[self._boundary_rows]
+
+    @cached_property
+    def edges(self) -> NDArray[np.int64]:
+        """Unique undirected edges (a < b)."""
+        e = np.sort(self.directed_edges, axis=1)
+        return np.unique(e, axis=0)
+
+    def edge_midpoints(self, edges: NDArray[np.int64]) -> NDArray[np.float64]:
+        return 0.5 * (self.points[edges[:, 0]] + self.points[edges[:, 1]])
+
+    def boundary_normals(self) -> NDArray[np.float64]:
+        """Unit outward normals of the boundary edges."""
+        d = self.points[self.boundary_edges[:, 1]] - self.points[self.boundary_edges[:, 0]]
+        n = np.column_stack([d[:, 1], -d[:, 0]])
+        return n / np.linalg.norm(n, axis=1)[:, None]
+
+    # ------------------------------------------------------------------ parts
+    def part_edges(self, name: str) -> NDArray[np.int64]:
+        """Boundary edges of one part, oriented as in their cell."""
+        return self.boundary_edges[self.boundary_tags == part_code(name)]
+
+    def part_vertices(self, name: str) -> NDArray[np.int64]:
+        """Sorted ids of the vertices on the closure of a part."""
+        return np.unique(self.part_edges(name))
+
+    def with_boundary(
+        self,
+        parts: Mapping[str, Callable[[NDArray[np.float64]], NDArray[np.bool_]] | str],
+        *,
+        overwrite: bool = True,
+    ) -> Mesh:
+        """Tag boundary edges by predicates on edge midpoints.
+
+        Parameters
+        ----------
+        parts
+            ``{part_name: predicate}``; a predicate maps an (m, 2) array of edge
+            midpoints to an (m,) boolean array. The string ``"rest"`` as a
+            predicate tags every edge not tagged by the other entries. Entries are
+            applied in the order given; a later entry wins where two match.
+        overwrite
+            If False, keep existing non-zero tags and only tag untagged edges.
+
+        Returns
+        -------
+        Mesh
+            A new mesh with the same cells and updated ``boundary_tags``.
+        """
+        tags = np.array(self.boundary_tags, dtype=np.int8, copy=True)
+        if overwrite:
+            tags[:] = UNTAGGED
+        mid = self.edge_midpoints(self.boundary_edges)
+        rest: list[str] = []
+        for name, pred in parts.items():
+            code = part_code(name)
+            if isinstance(pred, str):
+                if pred != "rest":
+                    raise ValueError(f"boundary part {name!r}: unknown selector {pred!r}")
+                rest.append(name)
+                continue
+            hit = np.asarray(pred(mid), dtype=bool)
+            if hit.shape != (len(mid),):
+                raise ValueError(f"boundary part {name!r}: predicate must return shape ({len(mid)},)")
+            tags[hit & ((tags == UNTAGGED) | overwrite)] = code
+        for name in rest:
+            tags[tags == UNTAGGED] = part_code(name)
+        return Mesh(self.points, self.cell_offsets, self.cell_vertices, tags)
+
+    # ------------------------------------------------------------------ geometry
+    @cached_property
+    def cell_areas(self) -> NDArray[np.float64]:
+        """Signed areas (positive for counter-clockwise cells), shoelace formula."""
+        a, b = self.directed_edges[:, 0], self.directed_edges[:, 1]
+        x, y = self.points[:, 0], self.points[:, 1]
+        cross = x[a] * y[b] - x[b] * y[a]
+        return 0.5 * np.bincount(self.edge_cells, weights=cross, minlength=self.n_cells)
+
+    @cached_property
+    def cell_diameters(self) -> NDArray[np.float64]:
+        """Largest vertex-to-vertex distance of every cell."""
+        diam = np.zeros(self.n_cells)
+        for n, (ids, verts) in self.groups.items():
+            X = self.points[verts]
+            d = np.linalg.norm(X[:, :, None, :] - X[:, None, :, :], axis=-1)
+            diam[ids] = d.reshape(len(ids), n * n).max(axis=1)
+        return diam
+
+    @property
+    def h(self) -> float:
+        """Mesh size: the largest cell diameter."""
+        return float(self.cell_diameters.max())
+
+    def __repr__(self) -> str:
+        counts = {n: len(ids) for n, (ids, _) in self.groups.items()}
+        tagged = {p: int(np.sum(self.boundary_tags == part_code(p))) for p in PARTS}
+        return (
+            f"Mesh({self.n_points} vertices, {self.n_cells} cells by vertex count {counts}, "
+            f"boundary edges {tagged}, untagged {int(np.sum(self.boundary_tags == 0))})"
+        )
