@@ -1,0 +1,82 @@
+"""Contact data: coefficients along Gamma_C (g, mu, kappa) and the foundation velocity v*(t).
+
+A coefficient along Gamma_C is a number, a callable of the node coordinates
+(Python API), or a piecewise-linear table ``{"along": "x" | "y" | "s", "at": [...],
+"values": [...]}`` in a coordinate of the node (``s`` is the arc length along the
+contact part). ``v*(t)`` is a 2-vector, a callable of t, or a table
+``{"t": [...], "values": [[vx, vy], ...]}`` interpolated linearly in time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, Union
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .boundary import ContactBoundary
+
+NodalField = Union[float, Mapping[str, Any], Callable[[NDArray[np.float64]], ArrayLike]]
+
+
+def nodal_values(spec: NodalField, cb: ContactBoundary, name: str) -> NDArray[np.float64]:
+    """Values of a coefficient at the contact nodes (shape (m,))."""
+    if callable(spec):
+        v = np.asarray(spec(cb.points), dtype=float)
+        v = np.broadcast_to(v, (cb.m,)).copy()
+    elif isinstance(spec, Mapping):
+        along = spec.get("along", "x")
+        coord = {"x": cb.points[:, 0], "y": cb.points[:, 1], "s": cb.s}.get(along)
+        if coord is None:
+            raise ValueError(f"{name}: 'along' must be 'x', 'y' or 's', got {along!r}")
+        at = np.asarray(spec["at"], dtype=float)
+        vals = np.asarray(spec["values"], dtype=float)
+        if at.ndim != 1 or at.shape != vals.shape or at.size < 1 or np.any(np.diff(at) <= 0):
+            raise ValueError(f"{name}: 'at' must increase strictly and match 'values' in length")
+        v = np.interp(coord, at, vals)
+    else:
+        v = np.full(cb.m, float(spec))
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{name}: values along the contact part must be finite")
+    return v
+
+
+@dataclass(frozen=True)
+class FoundationVelocity:
+    """``v*(t)``; gives ``n*(t) = -v*/|v*|`` and ``|v*(t)|`` (paper 2.2)."""
+
+    spec: ArrayLike | Mapping[str, Any] | Callable[[float], ArrayLike]
+
+    def __call__(self, t: float) -> NDArray[np.float64]:
+        s = self.spec
+        if callable(s):
+            v = np.asarray(s(t), dtype=float)
+        elif isinstance(s, Mapping):
+            ts = np.asarray(s["t"], dtype=float)
+            vals = np.asarray(s["values"], dtype=float)
+            v = np.array([np.interp(t, ts, vals[:, 0]), np.interp(t, ts, vals[:, 1])])
+        else:
+            v = np.asarray(s, dtype=float)
+        if v.shape != (2,) or not np.all(np.isfinite(v)):
+            raise ValueError(f"v_star({t:g}) must be a finite 2-vector, got {v!r}")
+        return v
+
+    def n_star(self, t: float) -> NDArray[np.float64]:
+        v = self(t)
+        nv = float(np.linalg.norm(v))
+        if nv == 0.0:
+            raise ValueError(f"v_star({t:g}) = 0: the foundation velocity must not vanish (H0(c))")
+        return -v / nv
+
+    def speed(self, t: float) -> float:
+        return float(np.linalg.norm(self(t)))
+
+    def describe(self) -> Any:
+        s = self.spec
+        if callable(s):
+            return getattr(s, "__name__", "callable")
+        if isinstance(s, Mapping):
+            return {k: np.asarray(v).tolist() for k, v in s.items()}
+        return np.asarray(s, dtype=float).tolist()

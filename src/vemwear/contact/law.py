@@ -1,0 +1,157 @@
+"""Normal compliance laws ``p(r)`` of the soft layer (paper H(p)).
+
+A law is Lipschitz, monotone and zero for ``r <= 0``. Every law gives its
+values, a (generalized) derivative for Newton's method, and its Lipschitz constant
+``L_p`` for the smallness condition of Theorem 3.4.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+
+class ComplianceLaw:
+    """Interface: ``p(r)``, ``p.derivative(r)`` and ``p.lipschitz``."""
+
+    lipschitz: float
+
+    def __call__(self, r: ArrayLike) -> NDArray[np.float64]:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def derivative(self, r: ArrayLike) -> NDArray[np.float64]:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def describe(self) -> dict:  # pragma: no cover - interface
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class LinearCompliance(ComplianceLaw):
+    """``p(r) = c r_+`` (the paper's example uses c = 0.4)."""
+
+    c: float
+
+    def __post_init__(self) -> None:
+        if not np.isfinite(self.c) or self.c < 0:
+            raise ValueError(f"compliance: stiffness c must be >= 0, got {self.c}")
+
+    @property
+    def lipschitz(self) -> float:  # type: ignore[override]
+        return float(self.c)
+
+    def __call__(self, r: ArrayLike) -> NDArray[np.float64]:
+        return self.c * np.maximum(np.asarray(r, dtype=float), 0.0)
+
+    def derivative(self, r: ArrayLike) -> NDArray[np.float64]:
+        return np.where(np.asarray(r, dtype=float) > 0.0, self.c, 0.0)
+
+    def describe(self) -> dict:
+        return {"type": "linear", "c": self.c}
+
+
+@dataclass(frozen=True)
+class TableCompliance(ComplianceLaw):
+    """Piecewise-linear ``p`` through the points ``(r_i, p_i)``, ``0 = r_0 < r_1 < ...``.
+
+    ``p = 0`` for ``r <= 0``; beyond the last point it continues with the last slope.
+    """
+
+    r: tuple[float, ...]
+    p: tuple[float, ...]
+    _slopes: NDArray[np.float64] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        r = np.asarray(self.r, dtype=float)
+        p = np.asarray(self.p, dtype=float)
+        if r.ndim != 1 or r.shape != p.shape or r.size < 2:
+            raise ValueError("compliance table: r and p must be lists of equal length >= 2")
+        if not (np.all(np.isfinite(r)) and np.all(np.isfinite(p))):
+            raise ValueError("compliance table: r and p must be finite numbers")
+        if r[0] != 0.0 or p[0] != 0.0:
+            raise ValueError(
+                f"compliance table: must start at r = 0 with p = 0 (got r[0] = {r[0]}, p[0] = {p[0]}),"
+                " since p(r) = 0 for r <= 0"
+            )
+        if np.any(np.diff(r) <= 0):
+            i = int(np.flatnonzero(np.diff(r) <= 0)[0])
+            raise ValueError(f"compliance table: r must increase strictly (r[{i}] >= r[{i + 1}])")
+        slopes = np.diff(p) / np.diff(r)
+        if np.any(slopes < 0):
+            i = int(np.flatnonzero(slopes < 0)[0])
+            raise ValueError(
+                f"compliance table: p must be non-decreasing (p[{i}] = {p[i]} > p[{i + 1}] = {p[i + 1]})"
+            )
+        object.__setattr__(self, "r", tuple(r.tolist()))
+        object.__setattr__(self, "p", tuple(p.tolist()))
+        object.__setattr__(self, "_slopes", slopes)
+
+    @property
+    def lipschitz(self) -> float:  # type: ignore[override]
+        return float(self._slopes.max())
+
+    def _segment(self, r: NDArray[np.float64]) -> NDArray[np.int64]:
+        return np.clip(np.searchsorted(np.asarray(self.r), r, side="right") - 1, 0, len(self.r) - 2)
+
+    def __call__(self, r: ArrayLike) -> NDArray[np.float64]:
+        r = np.asarray(r, dtype=float)
+        k = self._segment(r)
+        val = np.asarray(self.p)[k] + self._slopes[k] * (r - np.asarray(self.r)[k])
+        return np.where(r > 0.0, val, 0.0)
+
+    def derivative(self, r: ArrayLike) -> NDArray[np.float64]:
+        r = np.asarray(r, dtype=float)
+        return np.where(r > 0.0, self._slopes[self._segment(r)], 0.0)
+
+    def describe(self) -> dict:
+        return {"type": "table", "r": list(self.r), "p": list(self.p)}
+
+
+@dataclass(frozen=True)
+class CallableCompliance(ComplianceLaw):
+    """A user law from the Python API: ``p`` and its derivative ``dp`` as callables.
+
+    ``lipschitz`` is the user's bound on ``dp``; it is only used for the
+    smallness estimate of Theorem 3.4.
+    """
+
+    p: Callable[[NDArray[np.float64]], NDArray[np.float64]]
+    dp: Callable[[NDArray[np.float64]], NDArray[np.float64]]
+    lipschitz: float = float("nan")  # type: ignore[assignment]
+
+    def __call__(self, r: ArrayLike) -> NDArray[np.float64]:
+        return np.asarray(self.p(np.asarray(r, dtype=float)), dtype=float)
+
+    def derivative(self, r: ArrayLike) -> NDArray[np.float64]:
+        return np.asarray(self.dp(np.asarray(r, dtype=float)), dtype=float)
+
+    def describe(self) -> dict:
+        return {"type": "callable", "p": getattr(self.p, "__name__", repr(self.p))}
+
+
+def check_law(law: ComplianceLaw, scale: float = 1.0, samples: int = 201) -> None:
+    """Check H(p) on samples of ``[-scale, 2 scale]``: zero for r <= 0, non-negative, monotone."""
+    r = np.linspace(-scale, 2 * scale, samples)
+    v = law(r)
+    if v.shape != r.shape or not np.all(np.isfinite(v)):
+        raise ValueError("compliance: p(r) must return finite values of the shape of r")
+    if np.any(v[r <= 0] != 0):
+        raise ValueError("compliance: p(r) must be 0 for r <= 0 (no pressure without penetration)")
+    if np.any(v < 0):
+        raise ValueError(f"compliance: p(r) is negative at r = {r[v < 0][0]:g}")
+    if np.any(np.diff(v) < -1e-14 * max(1.0, np.abs(v).max())):
+        i = int(np.flatnonzero(np.diff(v) < 0)[0])
+        raise ValueError(f"compliance: p is not monotone near r = {r[i]:g}")
+
+
+def as_law(spec: ComplianceLaw | float | Sequence) -> ComplianceLaw:
+    """A law from a law, a number c (linear law), or a pair of lists (table)."""
+    if isinstance(spec, ComplianceLaw):
+        return spec
+    if np.isscalar(spec):
+        return LinearCompliance(float(spec))  # type: ignore[arg-type]
+    r, p = spec  # type: ignore[misc]
+    return TableCompliance(tuple(r), tuple(p))

@@ -1,0 +1,165 @@
+"""The fully discrete scheme (paper 3.21-3.23): step problems and the wear update."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from tqdm.auto import tqdm
+
+from ..solvers import SOLVERS, NewtonOptions, StepSolution, UzawaOptions
+from .problem import Problem
+
+
+@dataclass(frozen=True)
+class SolverOptions:
+    """Which solver and how tightly.
+
+    Parameters
+    ----------
+    method : {"newton", "newton-full", "uzawa"}
+        ``newton``: semismooth Newton condensed on Gamma_C, one factorization of K
+        for the whole run (default). ``newton-full``: Newton on all dofs, a new
+        factorization per iteration (the plain path). ``uzawa``: the paper's
+        Uzawa iteration with two multipliers.
+    tol : float
+        Bound on the scaled KKT residuals of every step.
+    max_iter : int or None
+        Iteration limit per step (default: 100 for Newton, 200000 for Uzawa).
+    backend : {"auto", "scipy", "pardiso"}
+        Sparse direct solver.
+    """
+
+    method: str = "newton"
+    tol: float = 1e-10
+    max_iter: int | None = None
+    backend: str = "auto"
+
+    def __post_init__(self) -> None:
+        if self.method not in SOLVERS:
+            raise ValueError(f"solver: unknown method {self.method!r}; expected one of {list(SOLVERS)}")
+        if not (self.tol > 0):
+            raise ValueError(f"solver: tol must be positive, got {self.tol}")
+        if self.max_iter is not None and self.max_iter < 1:
+            raise ValueError(f"solver: max_iter must be >= 1, got {self.max_iter}")
+
+    def build(self, system):
+        cls = SOLVERS[self.method]
+        kw: dict[str, Any] = {"tol": self.tol, "backend": self.backend}
+        if self.max_iter is not None:
+            kw["max_iter"] = self.max_iter
+        if self.method == "uzawa":
+            return cls(system, UzawaOptions(**kw))
+        return cls(system, NewtonOptions(**kw))
+
+
+@dataclass
+class Result:
+    """Solution at every time level.
+
+    Attributes
+    ----------
+    t : (L,) time levels
+    points : (n_points, 2) vertex coordinates
+    u : (L, n_points, 2) displacement
+    contact_nodes : (m,) vertex ids on Gamma_C, ordered along it
+    contact_s : (m,) arc length along Gamma_C; contact_points : (m, 2)
+    wear, u_nu, penetration, lam, p : (L, m) at contact nodes; penetration = u_nu - wear,
+        lam and p are the pressures of the rigid and the soft layer
+    iterations : (L,) solver iterations per level
+    residuals : (L, 3) KKT residuals (equilibrium, feasibility, complementarity)
+    """
+
+    problem: Problem
+    t: NDArray[np.float64]
+    points: NDArray[np.float64]
+    u: NDArray[np.float64]
+    contact_nodes: NDArray[np.int64]
+    contact_s: NDArray[np.float64]
+    contact_points: NDArray[np.float64]
+    wear: NDArray[np.float64]
+    u_nu: NDArray[np.float64]
+    lam: NDArray[np.float64]
+    p: NDArray[np.float64]
+    iterations: NDArray[np.int64]
+    residuals: NDArray[np.float64]
+    solver: dict[str, Any] = field(default_factory=dict)
+    timings: dict[str, float] = field(default_factory=dict)
+
+    RESIDUAL_NAMES = ("equilibrium", "feasibility", "complementarity")
+
+    @property
+    def penetration(self) -> NDArray[np.float64]:
+        return self.u_nu - self.wear
+
+    def level(self, t: float) -> int:
+        """Index of the level at time t."""
+        return int(self.problem.time.index([t])[0])
+
+
+def simulate(
+    problem: Problem,
+    solver: SolverOptions | str = "newton",
+    *,
+    progress: bool = False,
+    callback: Callable[[int, StepSolution], None] | None = None,
+) -> Result:
+    """Run the fully discrete scheme (Problem 3.3) on the problem's time grid.
+
+    At each level ``n``: solve the step problem (3.21) with ``w^n`` fixed, warm-started
+    from level ``n - 1``; then ``w^{n+1} = w^n + k_n alpha(t_n) p(u_nu^n - w^n)``
+    (left rectangle rule, 3.22), with ``w^0 = 0`` (3.23).
+
+    Raises
+    ------
+    ConvergenceError
+        If a step does not reach the tolerance (the message names the level).
+    """
+    opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    d = problem.discrete
+    sysm = d.system
+    timings["assembly"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    step_solver = opts.build(sysm)
+    timings["setup"] = time.perf_counter() - t1
+
+    tgrid = problem.time.t
+    L, m = len(tgrid), sysm.m
+    nv = problem.mesh.n_points
+    U = np.zeros((L, nv, 2))
+    W, Y, LAM, P = (np.zeros((L, m)) for _ in range(4))
+    iters = np.zeros(L, dtype=np.int64)
+    res = np.zeros((L, 3))
+    w = np.zeros(m)
+    guess: StepSolution | None = None
+    t2 = time.perf_counter()
+    bar = tqdm(range(L), desc="time levels", unit="lvl", disable=not progress, leave=False)
+    for n in bar:
+        step = d.step_data(n, w)
+        sol = step_solver.solve(step, guess)
+        U[n] = d.full_displacement(sol.u)
+        W[n], Y[n], LAM[n], P[n] = w, sol.u_nu, sol.lam, sol.p
+        iters[n] = sol.iterations
+        res[n] = [sol.residuals[k] for k in Result.RESIDUAL_NAMES]
+        if callback is not None:
+            callback(n, sol)
+        if n + 1 < L:  # wear update (3.22), left rectangle rule
+            k_n = tgrid[n + 1] - tgrid[n]
+            w = w + k_n * d.alpha(step.t) * sol.p
+        guess = sol
+    timings["time_loop"] = time.perf_counter() - t2
+    timings["total"] = time.perf_counter() - t0
+    return Result(
+        problem=problem, t=np.array(tgrid), points=problem.mesh.points.copy(), u=U,
+        contact_nodes=d.contact.nodes.copy(), contact_s=d.contact.s.copy(),
+        contact_points=d.contact.points.copy(), wear=W, u_nu=Y, lam=LAM, p=P,
+        iterations=iters, residuals=res,
+        solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
+        timings=timings,
+    )

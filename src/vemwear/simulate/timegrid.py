@@ -1,0 +1,93 @@
+"""Partitions of [0, T] (paper Section 3.4): uniform, explicit steps, repeating patterns."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+
+@dataclass(frozen=True, eq=False)
+class TimeGrid:
+    """Time levels ``0 = t_0 < t_1 < ... < t_N = T``; ``k_n = t_{n+1} - t_n``."""
+
+    t: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.t, dtype=float)
+        if t.ndim != 1 or t.size < 1:
+            raise ValueError("time grid: needs at least the level t_0 = 0")
+        if not np.all(np.isfinite(t)):
+            raise ValueError("time grid: levels must be finite numbers")
+        if t[0] != 0.0:
+            raise ValueError(f"time grid: must start at t = 0, starts at {t[0]:g}")
+        if np.any(np.diff(t) <= 0):
+            i = int(np.flatnonzero(np.diff(t) <= 0)[0])
+            raise ValueError(
+                f"time grid: levels must increase strictly (t[{i}] = {t[i]:g}, t[{i + 1}] = {t[i + 1]:g})"
+            )
+        t.setflags(write=False)
+        object.__setattr__(self, "t", t)
+
+    @classmethod
+    def uniform(cls, T: float, steps: int) -> TimeGrid:
+        """``steps`` equal steps of size ``T / steps``."""
+        if int(steps) != steps or steps < 1:
+            raise ValueError(f"time grid: steps must be a positive integer, got {steps}")
+        if not T > 0:
+            raise ValueError(f"time grid: T must be positive, got {T}")
+        return cls(np.linspace(0.0, float(T), int(steps) + 1))
+
+    @classmethod
+    def from_steps(cls, steps: Sequence[float] | ArrayLike) -> TimeGrid:
+        """Levels from an explicit list of step sizes ``k_0, k_1, ...``."""
+        k = np.asarray(steps, dtype=float)
+        if k.ndim != 1 or k.size == 0 or np.any(~(k > 0)):
+            raise ValueError("time grid: step sizes must be a non-empty list of positive numbers")
+        return cls(np.concatenate([[0.0], np.cumsum(k)]))
+
+    @classmethod
+    def pattern(cls, T: float, pattern: Sequence[float]) -> TimeGrid:
+        """Repeat the step sizes of ``pattern`` until T; the last step is cut to end at T.
+
+        The paper's Example 5.3 uses ``pattern = [1/128, 3/128]`` with T = 1.
+        """
+        k = np.asarray(pattern, dtype=float)
+        if k.ndim != 1 or k.size == 0 or np.any(~(k > 0)):
+            raise ValueError("time grid: pattern must be a non-empty list of positive step sizes")
+        if not T > 0:
+            raise ValueError(f"time grid: T must be positive, got {T}")
+        reps = int(np.ceil(T / k.sum() + 1e-9)) + 1
+        t = np.concatenate([[0.0], np.cumsum(np.tile(k, reps))])
+        eps = 1e-9 * T
+        t = t[t < T - eps]
+        return cls(np.concatenate([t, [float(T)]]))
+
+    @property
+    def T(self) -> float:
+        return float(self.t[-1])
+
+    @property
+    def k(self) -> NDArray[np.float64]:
+        """Step sizes."""
+        return np.diff(self.t)
+
+    @property
+    def n_steps(self) -> int:
+        return len(self.t) - 1
+
+    def index(self, times: ArrayLike, rtol: float = 1e-9) -> NDArray[np.int64]:
+        """Indices of the levels closest to the given times (error if none is close)."""
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        idx = np.abs(self.t[None, :] - times[:, None]).argmin(axis=1)
+        off = np.abs(self.t[idx] - times) > rtol * max(self.T, 1.0)
+        if np.any(off):
+            raise ValueError(f"times {times[off].tolist()} are not levels of the time grid")
+        return idx
+
+    def describe(self) -> dict:
+        k = self.k
+        return {"T": self.T, "levels": len(self.t), "k_min": float(k.min(initial=0)),
+                "k_max": float(k.max(initial=0))}

@@ -1,0 +1,202 @@
+"""Semismooth (primal-dual active-set) Newton methods for the step problem.
+
+The complementarity conditions ``lam >= 0, N u <= g, lam (N u - g) = 0`` are written
+as ``lam = max(0, lam + c (N u - g))``; its generalized derivative splits the contact
+nodes into an active set (``N u = g``) and an inactive set (``lam = 0``), and
+``p`` contributes its generalized derivative ``p'``.
+
+* :class:`CondensedNewton` works on the contact unknowns only. The stiffness never
+  changes, so ``K`` is factorized once per simulation and condensed onto the contact
+  nodes: ``u = K^{-1} F - K^{-1} (N^T f_N + Tau^T f_T)`` gives
+  ``N u = d - C_NN f_N - C_NT f_T`` with the dense compliance blocks
+  ``C_NN = N K^{-1} N^T`` and ``C_NT = N K^{-1} Tau^T``.
+* :class:`FullNewton` is the plain path: Newton on all free dofs, with a fresh sparse
+  factorization of the Jacobian at every iteration.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
+
+from .linalg import factorize
+from .system import (
+    ContactSystem,
+    ConvergenceError,
+    StepData,
+    StepSolution,
+    check_converged,
+    kkt_residuals,
+)
+
+
+@dataclass(frozen=True)
+class NewtonOptions:
+    """Tolerance on the scaled KKT residuals, iteration limit, linear-algebra backend,
+    and how many right-hand sides the condensation solves at a time."""
+
+    tol: float = 1e-10
+    max_iter: int = 100
+    backend: str = "auto"
+    block: int = 256
+
+
+def _active_set_step(J11, J12, y, lam, R, active, g):
+    """Solve the Newton system for (dy, dlam) with dy_A = g_A - y_A and dlam_I = -lam_I.
+
+    J11 dy + J12 dlam = -R  (m equations); unknowns dy_I and dlam_A.
+    """
+    inactive = ~active
+    dy = np.zeros_like(y)
+    dlam = np.zeros_like(lam)
+    dy[active] = g[active] - y[active]
+    dlam[inactive] = -lam[inactive]
+    rhs = -R - J11[:, active] @ dy[active] - J12[:, inactive] @ dlam[inactive]
+    M = np.hstack([J11[:, inactive], J12[:, active]])
+    sol = np.linalg.solve(M, rhs)
+    ni = int(inactive.sum())
+    dy[inactive] = sol[:ni]
+    dlam[active] = sol[ni:]
+    return dy, dlam
+
+
+class CondensedNewton:
+    """Semismooth Newton on the condensed system; one factorization of K per simulation.
+
+    Parameters
+    ----------
+    system : ContactSystem
+    options : NewtonOptions
+    """
+
+    method = "newton"
+
+    def __init__(self, system: ContactSystem, options: NewtonOptions | None = None) -> None:
+        self.system = system
+        self.options = options or NewtonOptions()
+        self.factor = factorize(system.K, self.options.backend)
+        m = system.m
+        G = sp.vstack([system.N, system.Tau]).tocsc()  # (2m, nf)
+        C = np.empty((2 * m, 2 * m))
+        for start in range(0, 2 * m, self.options.block):  # K^{-1} G^T in blocks of columns
+            stop = min(start + self.options.block, 2 * m)
+            Z = self.factor.solve(G[start:stop].T.toarray())
+            C[:, start:stop] = G @ Z
+        self.C_NN = C[:m, :m]
+        self.C_NT = C[:m, m:]
+        self._F: NDArray | None = None
+        self._uF: NDArray | None = None
+        self._d: NDArray | None = None
+
+    def _displacement_of_load(self, F: NDArray) -> tuple[NDArray, NDArray]:
+        if self._F is None or not np.array_equal(F, self._F):
+            self._F = np.array(F, copy=True)
+            self._uF = self.factor.solve(self._F)
+            self._d = self.system.N @ self._uF
+        return self._uF, self._d  # type: ignore[return-value]
+
+    def recover(self, step: StepData, lam: NDArray, pa: NDArray) -> NDArray:
+        """Full displacement from the contact pressures (one back-substitution)."""
+        s = self.system
+        uF, _ = self._displacement_of_load(step.F)
+        f = s.N.T @ (s.omega * (pa + lam)) + s.Tau.T @ (s.omega * step.fric * pa)
+        return uF - self.factor.solve(f)
+
+    def solve(self, step: StepData, guess: StepSolution | None = None, recover: bool = True) -> StepSolution:
+        s, opt = self.system, self.options
+        _, d = self._displacement_of_load(step.F)
+        if guess is not None:
+            y, lam = np.array(guess.u_nu, copy=True), np.array(guess.lam, copy=True)
+        else:
+            y, lam = np.minimum(d, s.g), np.zeros(s.m)
+        A_fric = self.C_NT * (s.omega * step.fric)[None, :]
+        A_norm = self.C_NN * s.omega[None, :]
+        it = 0
+        for it in range(1, opt.max_iter + 1):
+            r = y - step.w
+            pa, dp = s.p(r), s.p.derivative(r)
+            R = y - d + A_norm @ (pa + lam) + A_fric @ pa
+            active = lam + s.c_ncp * (y - s.g) > 0
+            J11 = np.eye(s.m) + (A_norm + A_fric) * dp[None, :]
+            dy, dlam = _active_set_step(J11, A_norm, y, lam, R, active, s.g)
+            y, lam = y + dy, lam + dlam
+            scale = max(float(np.abs(s.g).max()), float(np.abs(y).max()))
+            if np.abs(dy).max() <= 1e-14 * scale and np.array_equal(
+                active, lam + s.c_ncp * (y - s.g) > 0
+            ):
+                break
+        lam = np.maximum(lam, 0.0)
+        pa = s.p(y - step.w)
+        if recover:
+            u = self.recover(step, lam, pa)
+            res = kkt_residuals(s, step, u, lam)
+            y = s.N @ u
+        else:
+            u = None
+            R = y - d + A_norm @ (pa + lam) + A_fric @ pa
+            res = _condensed_residuals(s, y, lam, R)
+        check_converged(res, opt.tol, step, "semismooth Newton (condensed)", it)
+        return StepSolution(u=u, u_nu=y, lam=lam, p=pa, iterations=it, residuals=res)
+
+
+def _condensed_residuals(s: ContactSystem, y, lam, R) -> dict[str, float]:
+    tiny = np.finfo(float).tiny
+    g_ref = max(float(np.abs(s.g).max()), tiny)
+    lam_ref = max(float(np.abs(lam).max(initial=0)), tiny)
+    return {
+        "equilibrium": float(np.abs(R).max(initial=0) / g_ref),
+        "feasibility": float(max(0.0, (y - s.g).max(initial=0)) / g_ref),
+        "complementarity": float(np.abs(np.minimum(lam / lam_ref, (s.g - y) / g_ref)).max(initial=0)),
+    }
+
+
+class FullNewton:
+    """Semismooth Newton on all free dofs (the plain path): a new sparse LU per iteration."""
+
+    method = "newton-full"
+
+    def __init__(self, system: ContactSystem, options: NewtonOptions | None = None) -> None:
+        self.system = system
+        self.options = options or NewtonOptions()
+
+    def solve(self, step: StepData, guess: StepSolution | None = None, recover: bool = True) -> StepSolution:
+        s, opt = self.system, self.options
+        if guess is not None and guess.u is not None:
+            u, lam = np.array(guess.u, copy=True), np.array(guess.lam, copy=True)
+        else:
+            u, lam = np.zeros(s.n_free), np.zeros(s.m)
+        N, Tau, om = s.N, s.Tau, s.omega
+        it = 0
+        for it in range(1, opt.max_iter + 1):
+            y = N @ u
+            pa, dp = s.p(y - step.w), s.p.derivative(y - step.w)
+            active = lam + s.c_ncp * (y - s.g) > 0
+            J = s.K + N.T @ sp.diags(om * dp) @ N + Tau.T @ sp.diags(om * step.fric * dp) @ N
+            # residual without the rigid-layer term: lam_new enters the system directly
+            r0 = s.K @ u - step.F + N.T @ (om * pa) + Tau.T @ (om * step.fric * pa)
+            NA = N[np.flatnonzero(active)]
+            nA = NA.shape[0]
+            M = sp.bmat([[J, NA.T @ sp.diags(om[active])], [NA, None]], format="csc")
+            rhs = np.concatenate([-r0, s.g[active] - NA @ u])
+            if nA == 0:
+                M, rhs = sp.csc_matrix(J), -r0
+            sol = spla.splu(M).solve(rhs)
+            du = sol[: s.n_free]
+            lam_new = np.zeros(s.m)
+            lam_new[active] = sol[s.n_free:]
+            u, lam = u + du, lam_new
+            if np.abs(du).max() <= 1e-14 * max(np.abs(u).max(), float(np.abs(s.g).max())) and \
+                    np.array_equal(active, lam + s.c_ncp * (N @ u - s.g) > 0):
+                break
+        lam = np.maximum(lam, 0.0)
+        res = kkt_residuals(s, step, u, lam)
+        check_converged(res, opt.tol, step, "semismooth Newton (full)", it)
+        y = N @ u
+        return StepSolution(u=u, u_nu=y, lam=lam, p=s.p(y - step.w), iterations=it, residuals=res)
+
+
+__all__ = ["CondensedNewton", "ConvergenceError", "FullNewton", "NewtonOptions"]

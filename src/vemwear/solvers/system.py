@@ -1,0 +1,129 @@
+"""The step problem (paper 3.21) as a complementarity problem on the free dofs.
+
+With ``w`` fixed, find ``u`` and ``lam`` such that (design.md section 4)
+
+    K u - F + N^T(omega (p(N u - w) + lam)) + Tau^T(omega fric p(N u - w)) = 0,
+    lam >= 0,  N u <= g,  lam (N u - g) = 0,
+
+where ``fric_a = mu_a (n*(t) . tau_a)``. Here ``lam`` and ``p`` are pressures
+(forces per unit length) of the rigid and the soft layer; ``omega`` turns them
+into nodal forces.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from ..contact.law import ComplianceLaw
+
+
+class ConvergenceError(RuntimeError):
+    """A step problem whose solver did not reach its tolerance."""
+
+
+@dataclass(frozen=True, eq=False)
+class ContactSystem:
+    """Data of the step problem that do not change in time.
+
+    Attributes
+    ----------
+    K : (nf, nf) sparse stiffness on the free dofs
+    N, Tau : (m, nf) sparse normal and tangential components at the contact nodes
+    omega : (m,) nodal weights
+    g : (m,) thickness of the soft layer (bound on ``N u``)
+    p : the compliance law
+    """
+
+    K: sp.csr_matrix
+    N: sp.csr_matrix
+    Tau: sp.csr_matrix
+    omega: NDArray[np.float64]
+    g: NDArray[np.float64]
+    p: ComplianceLaw
+    c_ncp: NDArray[np.float64] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        # scale of the complementarity function lam + c (N u - g): the normal stiffness
+        # per unit length at each node, so both terms are pressures of comparable size
+        diagK = self.K.diagonal()
+        kn = (self.N.multiply(self.N)) @ diagK
+        object.__setattr__(self, "c_ncp", kn / self.omega)
+
+    @property
+    def m(self) -> int:
+        return len(self.omega)
+
+    @property
+    def n_free(self) -> int:
+        return self.K.shape[0]
+
+    def contact_force(self, u: NDArray, lam: NDArray, fric: NDArray, w: NDArray):
+        """The contact term of the residual and the soft-layer pressure at ``u``."""
+        pa = self.p(self.N @ u - w)
+        force = self.N.T @ (self.omega * (pa + lam)) + self.Tau.T @ (self.omega * fric * pa)
+        return force, pa
+
+
+@dataclass(frozen=True)
+class StepData:
+    """What changes from step to step: load, wear, friction direction, and where we are."""
+
+    F: NDArray[np.float64]
+    w: NDArray[np.float64]
+    fric: NDArray[np.float64]
+    t: float = 0.0
+    level: int = 0
+
+
+@dataclass
+class StepSolution:
+    """Solution of one step problem with its solver statistics."""
+
+    u: NDArray[np.float64] | None
+    u_nu: NDArray[np.float64]
+    lam: NDArray[np.float64]
+    p: NDArray[np.float64]
+    iterations: int
+    residuals: dict[str, float]
+
+
+def kkt_residuals(
+    system: ContactSystem, step: StepData, u: NDArray, lam: NDArray
+) -> dict[str, float]:
+    """Scaled KKT residuals of a candidate solution (all dimensionless, max norms).
+
+    ``equilibrium``: residual of the equation over the largest force in it;
+    ``feasibility``: largest violation of ``N u <= g`` over max g;
+    ``complementarity``: ``max |min(lam / lam_ref, (g - N u) / g_ref)|`` (it is zero
+    exactly when lam >= 0, N u <= g and lam (N u - g) = 0).
+    """
+    y = system.N @ u
+    force, pa = system.contact_force(u, lam, step.fric, step.w)
+    Ku = system.K @ u
+    r = Ku - step.F + force
+    tiny = np.finfo(float).tiny
+    fscale = max(np.abs(step.F).max(initial=0), np.abs(Ku).max(initial=0), np.abs(force).max(initial=0), tiny)
+    g_ref = max(float(np.abs(system.g).max()), tiny)
+    lam_ref = max(float(np.abs(lam).max(initial=0)), float(np.abs(pa).max(initial=0)), tiny)
+    ncp = np.minimum(lam / lam_ref, (system.g - y) / g_ref)
+    return {
+        "equilibrium": float(np.abs(r).max(initial=0) / fscale),
+        "feasibility": float(max(0.0, (y - system.g).max(initial=0)) / g_ref),
+        "complementarity": float(np.abs(ncp).max(initial=0)),
+    }
+
+
+def check_converged(
+    residuals: dict[str, float], tol: float, step: StepData, method: str, iterations: int
+) -> None:
+    """Raise :class:`ConvergenceError` naming the time level when a residual is above tol."""
+    worst = max(residuals, key=lambda k: residuals[k])
+    if not residuals[worst] <= tol:  # also catches NaN
+        raise ConvergenceError(
+            f"{method} did not converge at time level {step.level} (t = {step.t:.6g}) after "
+            f"{iterations} iterations: {worst} residual {residuals[worst]:.3e} > tol {tol:.1e}"
+        )

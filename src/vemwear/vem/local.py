@@ -1,0 +1,154 @@
+"""Local virtual element matrices of lowest order (k = 1), batched by vertex count.
+
+For a batch of ``m`` cells with ``n`` vertices each (coordinates ``X``, shape
+``(m, n, 2)``, counter-clockwise) and local dofs ordered ``(u_x1, u_y1, u_x2, ...)``:
+
+* the strain of the projection is computable from boundary values,
+  ``eps(Pi v) = 1/|K| int_dK sym(v (x) n) ds`` (paper 3.8), since v is linear on edges;
+* the rigid part of ``Pi v`` is fixed by the vertex averages (3.9) and (3.10);
+* ``a_h^K(u, v) = |K| eps(Pi u) : C eps(Pi v) + S^K((I - Pi) u, (I - Pi) v)`` (3.11),
+  with the dofi-dofi stabilization ``S^K = s_K * sum_i chi_i chi_i``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+STABILIZATIONS = ("paper", "eta", "trace")
+
+
+@dataclass(frozen=True)
+class Material:
+    """Isotropic linear elasticity, ``sigma = 2 eta eps + lam tr(eps) I`` (paper Section 5).
+
+    Parameters
+    ----------
+    lam, eta : float
+        Lamé coefficients lambda and eta (the paper's names; eta is the shear modulus).
+    """
+
+    lam: float
+    eta: float
+
+    def __post_init__(self) -> None:
+        for name in ("lam", "eta"):
+            v = getattr(self, name)
+            if not np.isfinite(v) or v <= 0:
+                raise ValueError(f"material: Lamé coefficient {name} must be positive, got {v}")
+
+    @property
+    def D(self) -> NDArray[np.float64]:
+        """Elasticity matrix in Voigt notation (eps_xx, eps_yy, 2 eps_xy)."""
+        lam, eta = self.lam, self.eta
+        return np.array([[lam + 2 * eta, lam, 0.0], [lam, lam + 2 * eta, 0.0], [0.0, 0.0, eta]])
+
+    @property
+    def coercivity(self) -> float:
+        """Smallest eigenvalue of C on symmetric tensors: m_C = 2 eta (for lam > 0)."""
+        return 2.0 * self.eta
+
+
+def geometry(X: NDArray[np.float64]):
+    """Areas, vertex averages and the vertex normal weights of a batch of polygons.
+
+    Returns
+    -------
+    area : (m,) array
+    xbar : (m, 2) array, the vertex average (3.9)
+    q : (m, n, 2) array, ``q_i = (|e_{i-1}| n_{i-1} + |e_i| n_i) / 2`` so that
+        ``int_dK v (x) n ds = sum_i v_i (x) q_i`` for v linear on edges.
+    """
+    Xn = np.roll(X, -1, axis=1)
+    area = 0.5 * np.sum(X[..., 0] * Xn[..., 1] - Xn[..., 0] * X[..., 1], axis=1)
+    d = Xn - X
+    N = np.stack([d[..., 1], -d[..., 0]], axis=-1)  # |e| n for counter-clockwise cells
+    q = 0.5 * (N + np.roll(N, 1, axis=1))
+    xbar = X.mean(axis=1)
+    return area, xbar, q
+
+
+def strain_operator(area: NDArray, q: NDArray) -> NDArray[np.float64]:
+    """``B`` with ``(eps_xx, eps_yy, 2 eps_xy)(Pi v) = B @ v``; shape (m, 3, 2n)."""
+    m, n, _ = q.shape
+    B = np.zeros((m, 3, 2 * n))
+    qa = q / area[:, None, None]
+    B[:, 0, 0::2] = qa[..., 0]
+    B[:, 1, 1::2] = qa[..., 1]
+    B[:, 2, 0::2] = qa[..., 1]
+    B[:, 2, 1::2] = qa[..., 0]
+    return B
+
+
+def projection_matrix(X: NDArray, xbar: NDArray, B: NDArray) -> NDArray[np.float64]:
+    """Matrix of the dofs of ``Pi v`` (its vertex values) in terms of the dofs of v.
+
+    ``Pi v(x) = vbar + E (x - xbar) + omega J (x - xbar)`` where vbar is the vertex
+    average of v (3.9), ``E = eps(Pi v)`` and omega solves (3.10):
+    ``omega = (sum_i d_i x v_i - sum_i d_i x E d_i) / sum_i |d_i|^2`` with ``d_i = x_i - xbar``.
+    Shape (m, 2n, 2n).
+    """
+    m, n, _ = X.shape
+    d = X - xbar[:, None, :]  # (m, n, 2)
+    exx, eyy, gxy = B[:, 0], B[:, 1], B[:, 2]  # (m, 2n) each: strain per unit dof
+    exy = 0.5 * gxy
+    # E_k d_j for every dof k and vertex j: (m, n, 2n) per component
+    Ed_x = d[..., 0:1] * exx[:, None, :] + d[..., 1:2] * exy[:, None, :]
+    Ed_y = d[..., 0:1] * exy[:, None, :] + d[..., 1:2] * eyy[:, None, :]
+    # sum_i d_i x E_k d_i
+    dxEd = np.sum(d[..., 0:1] * Ed_y - d[..., 1:2] * Ed_x, axis=1)  # (m, 2n)
+    # sum_i d_i x v_i for the unit dof k = (i, c): c = x -> -d_iy, c = y -> d_ix
+    dxv = np.empty((m, 2 * n))
+    dxv[:, 0::2] = -d[..., 1]
+    dxv[:, 1::2] = d[..., 0]
+    omega = (dxv - dxEd) / np.sum(d**2, axis=(1, 2))[:, None]  # (m, 2n)
+    P = np.zeros((m, 2 * n, 2 * n))
+    P[:, 0::2, 0::2] = 1.0 / n
+    P[:, 1::2, 1::2] = 1.0 / n
+    P[:, 0::2, :] += Ed_x - d[..., 1:2] * omega[:, None, :]  # J d = (-d_y, d_x)
+    P[:, 1::2, :] += Ed_y + d[..., 0:1] * omega[:, None, :]
+    return P
+
+
+def element_matrices(
+    X: NDArray[np.float64], material: Material, stabilization: str = "paper"
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Local stiffness matrices ``a_h^K`` (3.11) of a batch of cells with equal vertex count.
+
+    Parameters
+    ----------
+    X : (m, n, 2) array
+        Vertex coordinates, counter-clockwise.
+    material : Material
+    stabilization : {"paper", "eta", "trace"}
+        Weight ``s_K`` of the dofi-dofi term: ``"paper"`` uses 1 (the paper's choice),
+        ``"eta"`` uses ``2 eta``, ``"trace"`` uses ``tr(K_c) / (2n)`` with ``K_c`` the
+        consistency matrix.
+
+    Returns
+    -------
+    K : (m, 2n, 2n) local stiffness
+    B : (m, 3, 2n) strain operator of ``Pi``
+    P : (m, 2n, 2n) projection on vertex values
+    area : (m,) cell areas
+    """
+    if stabilization not in STABILIZATIONS:
+        raise ValueError(
+            f"unknown stabilization {stabilization!r}; expected one of {', '.join(STABILIZATIONS)}"
+        )
+    area, xbar, q = geometry(X)
+    B = strain_operator(area, q)
+    Kc = area[:, None, None] * np.einsum("mai,ab,mbj->mij", B, material.D, B)
+    P = projection_matrix(X, xbar, B)
+    m, n2, _ = P.shape
+    IP = np.eye(n2)[None] - P
+    if stabilization == "paper":
+        s = np.ones(m)
+    elif stabilization == "eta":
+        s = np.full(m, 2.0 * material.eta)
+    else:
+        s = np.trace(Kc, axis1=1, axis2=2) / n2
+    K = Kc + s[:, None, None] * np.einsum("mki,mkj->mij", IP, IP)
+    return K, B, P, area
