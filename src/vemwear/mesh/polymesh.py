@@ -242,6 +242,9 @@ class Mesh:
         tags = np.array(self.boundary_tags, dtype=np.int8, copy=True)
         if overwrite:
             tags[:] = UNTAGGED
+        # with overwrite=False only the edges untagged on entry may be (re)tagged, so
+        # that a later entry still wins over an earlier one of the same call
+        protected = tags != UNTAGGED
         mid = self.edge_midpoints(self.boundary_edges)
         rest: list[str] = []
         for name, pred in parts.items():
@@ -254,7 +257,7 @@ class Mesh:
             hit = np.asarray(pred(mid), dtype=bool)
             if hit.shape != (len(mid),):
                 raise ValueError(f"boundary part {name!r}: predicate must return shape ({len(mid)},)")
-            tags[hit & ((tags == UNTAGGED) | overwrite)] = code
+            tags[hit & ~protected] = code
         for name in rest:
             tags[tags == UNTAGGED] = part_code(name)
         return Mesh(self.points, self.cell_offsets, self.cell_vertices, tags)
@@ -264,8 +267,10 @@ class Mesh:
     def cell_areas(self) -> NDArray[np.float64]:
         """Signed areas (positive for counter-clockwise cells), shoelace formula."""
         a, b = self.directed_edges[:, 0], self.directed_edges[:, 1]
-        x, y = self.points[:, 0], self.points[:, 1]
-        cross = x[a] * y[b] - x[b] * y[a]
+        # coordinates relative to the first vertex of each cell keep the sum accurate
+        ref = np.repeat(self.points[self.cell_vertices[self.cell_offsets[:-1]]], self.cell_sizes, axis=0)
+        pa, pb = self.points[a] - ref, self.points[b] - ref
+        cross = pa[:, 0] * pb[:, 1] - pb[:, 0] * pa[:, 1]
         return 0.5 * np.bincount(self.edge_cells, weights=cross, minlength=self.n_cells)
 
     @cached_property

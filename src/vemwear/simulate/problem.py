@@ -147,9 +147,12 @@ class Discretization:
         self.free = np.flatnonzero(~fixed)
         self.K_full = stiffness(mesh, problem.material, problem.stabilization)
         K = self.K_full[self.free][:, self.free].tocsr()
+        index = -np.ones(ndof, dtype=np.int64)
+        index[self.free] = np.arange(len(self.free))
+        cdofs = index[np.column_stack([2 * cb.nodes, 2 * cb.nodes + 1])]
         self.system = ContactSystem(
-            K=K, N=cb.N[:, self.free].tocsr(), Tau=cb.Tau[:, self.free].tocsr(),
-            omega=cb.weights, g=self.g, p=problem.p,
+            K=K, contact_dofs=cdofs, normals=cb.normals, tangents=cb.tangents,
+            omega=cb.weights, g=self.g, p=problem.p, dof_points=mesh.points[self.free // 2],
         )
         self._constant_load = not (callable(problem.f1) or callable(problem.f2))
         self._F0: NDArray | None = None

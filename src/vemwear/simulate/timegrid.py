@@ -89,5 +89,6 @@ class TimeGrid:
 
     def describe(self) -> dict:
         k = self.k
-        return {"T": self.T, "levels": len(self.t), "k_min": float(k.min(initial=0)),
-                "k_max": float(k.max(initial=0))}
+        return {"T": self.T, "levels": len(self.t),
+                "k_min": float(k.min()) if k.size else 0.0,
+                "k_max": float(k.max()) if k.size else 0.0}

@@ -23,7 +23,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from .linalg import factorize
+from .linalg import SchurFactor, factorize
 from .system import (
     ContactSystem,
     ConvergenceError,
@@ -78,16 +78,22 @@ class CondensedNewton:
     def __init__(self, system: ContactSystem, options: NewtonOptions | None = None) -> None:
         self.system = system
         self.options = options or NewtonOptions()
-        self.factor = factorize(system.K, self.options.backend)
         m = system.m
-        G = sp.vstack([system.N, system.Tau]).tocsc()  # (2m, nf)
-        C = np.empty((2 * m, 2 * m))
-        for start in range(0, 2 * m, self.options.block):  # K^{-1} G^T in blocks of columns
-            stop = min(start + self.options.block, 2 * m)
-            Z = self.factor.solve(G[start:stop].T.toarray())
-            C[:, start:stop] = G @ Z
-        self.C_NN = C[:m, :m]
-        self.C_NT = C[:m, m:]
+        if system.dof_points is not None:
+            # one factorization whose trailing block is the Schur complement on Gamma_C
+            self.factor = SchurFactor(system.K, system.contact_dofs.ravel(), system.dof_points)
+            C = self.factor.S_inv.reshape(m, 2, m, 2)  # block of K^{-1} on the contact dofs
+            nu, tau = system.normals, system.tangents
+            self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
+            self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
+        else:  # no geometry for the ordering: K^{-1} G^T by blocks of solves
+            self.factor = factorize(system.K, self.options.backend)
+            G = sp.vstack([system.N, system.Tau]).tocsc()  # (2m, nf)
+            Cg = np.empty((2 * m, 2 * m))
+            for start in range(0, 2 * m, self.options.block):
+                stop = min(start + self.options.block, 2 * m)
+                Cg[:, start:stop] = G @ self.factor.solve(G[start:stop].T.toarray())
+            self.C_NN, self.C_NT = Cg[:m, :m], Cg[:m, m:]
         self._F: NDArray | None = None
         self._uF: NDArray | None = None
         self._d: NDArray | None = None

@@ -32,25 +32,37 @@ class ContactSystem:
     Attributes
     ----------
     K : (nf, nf) sparse stiffness on the free dofs
-    N, Tau : (m, nf) sparse normal and tangential components at the contact nodes
+    contact_dofs : (m, 2) free-dof ids of the x and y components at each contact node
+    normals, tangents : (m, 2) unit nu_a and tau_a
     omega : (m,) nodal weights
     g : (m,) thickness of the soft layer (bound on ``N u``)
     p : the compliance law
+    dof_points : (nf, 2) coordinates of the vertex of each free dof (for orderings), optional
     """
 
     K: sp.csr_matrix
-    N: sp.csr_matrix
-    Tau: sp.csr_matrix
+    contact_dofs: NDArray[np.int64]
+    normals: NDArray[np.float64]
+    tangents: NDArray[np.float64]
     omega: NDArray[np.float64]
     g: NDArray[np.float64]
     p: ComplianceLaw
+    dof_points: NDArray[np.float64] | None = None
+    N: sp.csr_matrix = field(init=False, repr=False)
+    Tau: sp.csr_matrix = field(init=False, repr=False)
     c_ncp: NDArray[np.float64] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
+        m, nf = len(self.omega), self.K.shape[0]
+        rows = np.repeat(np.arange(m), 2)
+        cols = np.asarray(self.contact_dofs).ravel()
+        for name, direction in (("N", self.normals), ("Tau", self.tangents)):
+            op = sp.csr_matrix((np.asarray(direction).ravel(), (rows, cols)), shape=(m, nf))
+            object.__setattr__(self, name, op)
         # scale of the complementarity function lam + c (N u - g): the normal stiffness
         # per unit length at each node, so both terms are pressures of comparable size
         diagK = self.K.diagonal()
-        kn = (self.N.multiply(self.N)) @ diagK
+        kn = np.sum(diagK[self.contact_dofs] * np.asarray(self.normals) ** 2, axis=1)
         object.__setattr__(self, "c_ncp", kn / self.omega)
 
     @property

@@ -61,12 +61,13 @@ def geometry(X: NDArray[np.float64]):
     q : (m, n, 2) array, ``q_i = (|e_{i-1}| n_{i-1} + |e_i| n_i) / 2`` so that
         ``int_dK v (x) n ds = sum_i v_i (x) q_i`` for v linear on edges.
     """
-    Xn = np.roll(X, -1, axis=1)
-    area = 0.5 * np.sum(X[..., 0] * Xn[..., 1] - Xn[..., 0] * X[..., 1], axis=1)
-    d = Xn - X
+    xbar = X.mean(axis=1)
+    Y = X - xbar[:, None, :]  # relative coordinates keep the shoelace sum accurate
+    Yn = np.roll(Y, -1, axis=1)
+    area = 0.5 * np.sum(Y[..., 0] * Yn[..., 1] - Yn[..., 0] * Y[..., 1], axis=1)
+    d = Yn - Y
     N = np.stack([d[..., 1], -d[..., 0]], axis=-1)  # |e| n for counter-clockwise cells
     q = 0.5 * (N + np.roll(N, 1, axis=1))
-    xbar = X.mean(axis=1)
     return area, xbar, q
 
 

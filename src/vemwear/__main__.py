@@ -1,0 +1,5 @@
+"""``python -m vemwear``: the command-line interface."""
+
+from vemwear.cli.main import main
+
+raise SystemExit(main())

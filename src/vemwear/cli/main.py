@@ -1,0 +1,359 @@
+"""The ``vemwear`` command: ``run``, ``check`` and ``example``.
+
+Exit codes (also in ``vemwear --help`` and ``docs/config.md``): 0 success,
+1 unexpected internal error, 2 invalid input (configuration, mesh, data, output
+directory, command line), 3 a solver did not converge, 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import signal
+import sys
+import time
+import traceback
+import warnings
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .. import __version__
+from .config import ConfigError, load_config
+from .output import OutputDirError, atomic_output_dir, check_output_dir, write_outputs
+
+if TYPE_CHECKING:
+    from ..simulate import Result, SolverOptions
+
+__all__ = [
+    "EXIT_CONVERGENCE",
+    "EXIT_INPUT",
+    "EXIT_INTERNAL",
+    "EXIT_INTERRUPTED",
+    "EXIT_OK",
+    "build_parser",
+    "main",
+]
+
+EXIT_OK = 0
+EXIT_INTERNAL = 1
+EXIT_INPUT = 2
+EXIT_CONVERGENCE = 3
+EXIT_INTERRUPTED = 130
+
+PROG = "vemwear"
+EPILOG = """\
+exit codes:
+  0    success
+  1    unexpected internal error (rerun with --debug for a traceback)
+  2    invalid input: configuration file, mesh, data, output directory or arguments
+  3    a solver did not converge (no output directory is left behind)
+  130  interrupted (Ctrl-C or SIGTERM; no output directory is left behind)
+
+The configuration file format is documented in docs/config.md.
+"""
+SOLVER_METHODS = ("newton", "newton-full", "uzawa")
+
+
+class _Interrupted(KeyboardInterrupt):
+    """SIGTERM, handled like Ctrl-C."""
+
+
+# ---------------------------------------------------------------------------- parser
+def _formatter(prog: str) -> argparse.HelpFormatter:
+    return argparse.RawDescriptionHelpFormatter(prog, max_help_position=30)
+
+
+def _common(p: argparse.ArgumentParser, *, solve: bool) -> None:
+    if solve:
+        p.add_argument("-o", "--outdir", required=True, metavar="OUTDIR",
+                       help="output directory (written atomically: it appears only when "
+                            "the run is complete)")
+        p.add_argument("--force", action="store_true",
+                       help="replace an existing non-empty OUTDIR (only after the new run "
+                            "has completed)")
+        p.add_argument("--solver", choices=SOLVER_METHODS, metavar="METHOD",
+                       help="step solver, overriding the configuration: "
+                            + " | ".join(SOLVER_METHODS))
+        p.add_argument("--no-progress", action="store_true",
+                       help="do not show the progress bar of the time loop")
+    p.add_argument("--debug", action="store_true",
+                   help="print the full traceback on errors")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``vemwear`` command."""
+    from ..paper import available_examples
+
+    parser = argparse.ArgumentParser(
+        prog=PROG,
+        description="Quasistatic frictional contact with wear on polygonal meshes by the "
+                    "virtual element method.",
+        epilog=EPILOG, formatter_class=_formatter,
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
+    sub.required = True
+
+    d = "Validate a configuration file, solve the problem and write the results."
+    p = sub.add_parser("run", help=d, description=d, epilog=EPILOG, formatter_class=_formatter)
+    p.add_argument("config", metavar="CONFIG.toml", help="configuration file (docs/config.md)")
+    _common(p, solve=True)
+    p.set_defaults(func=cmd_run)
+
+    d = "Validate a configuration file and summarize the problem, without solving."
+    p = sub.add_parser("check", help=d, description=d, epilog=EPILOG, formatter_class=_formatter)
+    p.add_argument("config", metavar="CONFIG.toml", help="configuration file (docs/config.md)")
+    _common(p, solve=False)
+    p.set_defaults(func=cmd_check)
+
+    d = "Run one of the paper's numerical examples and write its figures and report."
+    examples = available_examples()
+    listing = "available examples:\n" + "\n".join(
+        f"  {name:<5}{text}" for name, text in examples.items())
+    p = sub.add_parser("example", help=d, description=d + "\n\n" + listing, epilog=EPILOG,
+                       formatter_class=_formatter)
+    p.add_argument("name", metavar="NAME", choices=list(examples),
+                   help="example number: " + ", ".join(examples))
+    _common(p, solve=True)
+    p.set_defaults(func=cmd_example)
+    return parser
+
+
+# ---------------------------------------------------------------------------- helpers
+def _solver_options(base: SolverOptions, method: str | None) -> SolverOptions:
+    from ..simulate import SolverOptions
+
+    if method is None or method == base.method:
+        return base
+    # keep tol and backend; iteration limits of different methods are not comparable
+    return SolverOptions(method=method, tol=base.tol, max_iter=None, backend=base.backend)
+
+
+def _fmt_k(k_min: float, k_max: float) -> str:
+    if math.isclose(k_min, k_max, rel_tol=1e-9):
+        inv = 1.0 / k_min
+        frac = f" = 1/{round(inv)}" if math.isclose(inv, round(inv), rel_tol=1e-9) else ""
+        return f"k = {k_min:.6g}{frac}"
+    return f"k in [{k_min:.6g}, {k_max:.6g}]"
+
+
+def _rows(rows: Sequence[tuple[str, str]]) -> str:
+    w = max(len(a) for a, _ in rows)
+    return "\n".join(f"  {a:<{w}}  {b}" for a, b in rows)
+
+
+def _run_summary(result: Result, title: str, outdir: Path, elapsed: float) -> str:
+    import numpy as np
+
+    it = np.asarray(result.iterations)
+    res = np.asarray(result.residuals)
+    worst = int(np.argmax(res.max(axis=0))) if res.size else 0
+    wT = np.asarray(result.wear[-1])
+    a = int(np.argmax(wT)) if wT.size else 0
+    at = np.asarray(result.contact_points[a]).tolist() if wT.size else []
+    k = np.diff(result.t)
+    rows = [
+        ("levels", f"{len(result.t)} (T = {result.t[-1]:g}, "
+                   f"{_fmt_k(float(k.min()), float(k.max()))})" if k.size else "1"),
+        ("solver", f"{result.solver.get('method', '?')}, iterations max {int(it.max())} per "
+                   f"step, total {int(it.sum())}"),
+        ("max KKT residual", f"{float(res.max()):.2e} ({result.RESIDUAL_NAMES[worst]}; "
+                             f"tol {result.solver.get('tol', float('nan')):g})"),
+        ("max wear at T", f"{float(wT.max()):.6g} at x = "
+                          f"({', '.join(f'{c:.4g}' for c in at)})" if wT.size else "-"),
+        ("time", f"{elapsed:.2f} s"),
+        ("output", str(outdir)),
+    ]
+    return f"{PROG}: {title}: done\n" + _rows(rows)
+
+
+@contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """Turn SIGTERM into an interrupt (so temporary output is cleaned up), main thread only."""
+    def handler(signum: int, frame: Any) -> None:
+        raise _Interrupted()
+
+    try:
+        old = signal.signal(signal.SIGTERM, handler)
+    except (ValueError, OSError, AttributeError):  # not the main thread / no SIGTERM
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def _say(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+# ---------------------------------------------------------------------------- commands
+def cmd_run(args: argparse.Namespace) -> int:
+    """``vemwear run CONFIG -o OUTDIR``: validate, solve, write, summarize."""
+    from ..simulate import simulate
+
+    t0 = time.perf_counter()
+    cfg = load_config(args.config)
+    out = check_output_dir(args.outdir, args.force, protect=[args.config])  # before solving
+    solver = _solver_options(cfg.solver, args.solver)
+    extra = {"config": cfg.data, "config_path": str(Path(args.config).resolve()),
+             "title": cfg.title}
+    with atomic_output_dir(out, args.force) as tmp:
+        result = simulate(cfg.problem, solver, progress=not args.no_progress)
+        write_outputs(result, tmp, times=cfg.output.times, figures=cfg.output.figures,
+                      vtk=cfg.output.vtk, extra=extra)
+    print(_run_summary(result, cfg.title, out, time.perf_counter() - t0))
+    return EXIT_OK
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    """``vemwear check CONFIG``: validate and describe the problem, no solve."""
+    import numpy as np
+
+    from ..mesh import PARTS, part_code
+    from ..solvers import resolve_backend
+
+    cfg = load_config(args.config)
+    pr = cfg.problem
+    m = pr.mesh
+    cb = pr.contact
+    counts = ", ".join(f"{n}-gons: {len(i)}" for n, (i, _) in sorted(m.groups.items()))
+    parts = ", ".join(f"{p} {int(np.sum(m.boundary_tags == part_code(p)))}" for p in PARTS)
+    k = pr.time.k
+    src = cfg.mesh_source
+    mesh_from = (f"file {src['file']}" if "file" in src
+                 else f"generator {src.get('generator')} ({src.get('function')})")
+    nodal = pr.nodal
+
+    def rng(name: str) -> str:
+        v = nodal[name]
+        lo, hi = float(v.min()), float(v.max())
+        return f"{lo:g}" if lo == hi else f"{lo:g} .. {hi:g}"
+
+    ce = m.part_edges("contact")
+    length = float(np.linalg.norm(m.points[ce[:, 1]] - m.points[ce[:, 0]], axis=1).sum())
+    law = pr.p.describe()
+    if law.get("type") == "linear":
+        p_text = f"p(r) = {law['c']:g} r_+"
+    elif law.get("type") == "table":
+        p_text = f"p: table of {len(law['r'])} points, r up to {law['r'][-1]:g}"
+    else:
+        p_text = f"p: {law}"
+    s = cfg.solver
+    rows = [
+        ("mesh", f"{mesh_from}: {m.n_points} vertices, {m.n_cells} cells ({counts}), "
+                 f"h = {m.h:.4g}"),
+        ("boundary edges", parts),
+        ("contact nodes", f"{cb.m} on {len(ce)} contact edges (Gamma_C length {length:.6g})"),
+        ("time levels", f"{len(pr.time.t)} on [0, {pr.time.T:g}], "
+                        f"{_fmt_k(float(k.min()), float(k.max())) if k.size else 'no steps'}"),
+        ("material", f"lam = {pr.material.lam:g}, eta = {pr.material.eta:g}; "
+                     f"stabilization {pr.stabilization}"),
+        ("contact", f"{p_text}; g {rng('g')}; mu {rng('mu')}; "
+                    f"kappa {rng('kappa')}; v_star {pr.v_star.describe()}"),  # type: ignore[union-attr]
+        ("solver", f"{s.method}, tol {s.tol:g}, max_iter "
+                   f"{s.max_iter if s.max_iter is not None else 'default'}, backend "
+                   f"{s.backend} ({resolve_backend(s.backend)})"),
+        ("output", f"profiles at t = {', '.join(f'{t:g}' for t in cfg.output.times)}; "
+                   f"figures {'yes' if cfg.output.figures else 'no'}; "
+                   f"vtk {'yes' if cfg.output.vtk else 'no'}"),
+    ]
+    if 2 * m.n_points <= 200_000:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            est = pr.discrete.smallness_estimate()
+        r = est.get("ratio", float("nan"))
+        if math.isfinite(r):
+            verdict = "holds" if r < 1 else "MAY FAIL (step problems may not be uniquely solvable)"
+            rows.append(("smallness (Thm 3.4)",
+                         f"L_p ||mu|| c0^2/C1 ~= {r:.3g} {'<' if r < 1 else '>='} 1: {verdict}"))
+        else:
+            rows.append(("smallness (Thm 3.4)", "not estimated"))
+    print(f"{PROG}: {args.config}: {cfg.title}: valid\n" + _rows(rows))
+    return EXIT_OK
+
+
+def cmd_example(args: argparse.Namespace) -> int:
+    """``vemwear example NAME -o OUTDIR``: run one of the paper's examples."""
+    from ..paper import load_example
+    from ..simulate import SolverOptions
+
+    mod = load_example(args.name)
+    out = check_output_dir(args.outdir, args.force)
+    solver = SolverOptions(method=args.solver or "newton")
+    t0 = time.perf_counter()
+    with atomic_output_dir(out, args.force) as tmp:
+        ex = mod.run(tmp, solver=solver, progress=not args.no_progress,
+                     log=None if args.no_progress else _say)
+    rows = [(name, f"max wear at T {float(r.wear[-1].max()):.6g}, iterations max "
+                   f"{int(r.iterations.max())}, max KKT residual {float(r.residuals.max()):.2e}")
+            for name, r in ex.results.items()]
+    rows += [("time", f"{time.perf_counter() - t0:.2f} s"), ("output", str(out)),
+             ("report", str(out / ex.report.name) if ex.report is not None else "-")]
+    print(f"{PROG}: {mod.TITLE}: done\n" + _rows(rows))
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------- entry point
+def _fail(msg: str, exc: BaseException, debug: bool) -> None:
+    if debug:
+        traceback.print_exception(exc)
+    print(f"{PROG}: error: {msg}", file=sys.stderr, flush=True)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``vemwear`` command line; returns the exit code.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments without the program name (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 success, 1 internal error, 2 invalid input, 3 no convergence, 130 interrupted.
+    """
+    from ..mesh import MeshError
+    from ..solvers import ConvergenceError
+
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, usage errors
+        code = exc.code
+        return code if isinstance(code, int) else (EXIT_OK if code is None else EXIT_INPUT)
+    debug = bool(getattr(args, "debug", False))
+    func: Callable[[argparse.Namespace], int] = args.func
+    try:
+        with _sigterm_as_interrupt():
+            return func(args)
+    except BrokenPipeError:  # stdout closed early (``vemwear check ... | head``): not an error
+        try:  # no second error when Python flushes stdout at exit
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        except (OSError, ValueError):
+            pass
+        return EXIT_OK
+    except (ConfigError, OutputDirError, MeshError) as exc:
+        _fail(str(exc), exc, debug)
+        return EXIT_INPUT
+    except ConvergenceError as exc:
+        _fail(f"the solver did not converge: {exc}", exc, debug)
+        return EXIT_CONVERGENCE
+    except KeyboardInterrupt as exc:
+        if debug:
+            traceback.print_exception(exc)
+        print(f"{PROG}: interrupted", file=sys.stderr, flush=True)
+        return EXIT_INTERRUPTED
+    except Exception as exc:  # the last line of defence, reported as such
+        _fail(f"internal error: {type(exc).__name__}: {exc}"
+              + ("" if debug else " (rerun with --debug for the traceback)"), exc, debug)
+        return EXIT_INTERNAL
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

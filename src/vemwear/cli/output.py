@@ -1,0 +1,236 @@
+"""Atomic output directories and the standard files of a run.
+
+A run writes into a temporary sibling of the output directory (``.NAME.tmp-XXXX``
+next to ``NAME``) and renames it into place only once everything is written. An
+existing non-empty output directory is refused unless ``force=True``; it is then
+replaced only after the new run has completed. On any error, ``Ctrl-C`` or
+``SystemExit`` the temporary directory is removed, so a failed run never leaves
+half-written output behind (and never destroys an older one).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ..simulate import Result
+
+__all__ = [
+    "FIGURE_NAMES",
+    "OutputDirError",
+    "atomic_output_dir",
+    "check_output_dir",
+    "write_outputs",
+]
+
+#: File names of the figures written by :func:`write_outputs`.
+FIGURE_NAMES = {
+    "contact_profiles": "contact_profiles.png",
+    "displacement": "displacement.png",
+    "deformed": "deformed.png",
+    "time_history": "time_history.png",
+}
+
+
+class OutputDirError(ValueError):
+    """The output directory cannot be used (exists and is not empty, is a file, ...)."""
+
+
+def _is_empty_dir(p: Path) -> bool:
+    return p.is_dir() and not any(p.iterdir())
+
+
+def check_output_dir(
+    outdir: str | os.PathLike[str],
+    force: bool = False,
+    protect: Sequence[str | os.PathLike[str]] = (),
+) -> Path:
+    """Check that ``outdir`` can receive a run's output, before any computation.
+
+    Parameters
+    ----------
+    outdir : path
+        The output directory.
+    force : bool
+        Allow replacing an existing non-empty directory.
+    protect : sequence of paths
+        Paths that must not lie inside ``outdir`` (even with ``force``), e.g. the
+        configuration file; the current working directory is always protected.
+
+    Returns
+    -------
+    Path
+        The absolute output path.
+
+    Raises
+    ------
+    OutputDirError
+        If ``outdir`` exists and is not a directory, or is a non-empty directory and
+        ``force`` is False, or its parent cannot hold the temporary directory.
+    """
+    out = Path(outdir).expanduser().absolute()
+    resolved = out.resolve()
+    for p in (Path.cwd(), *protect):
+        q = Path(p).expanduser().resolve()
+        if q == resolved or resolved in q.parents:
+            raise OutputDirError(
+                f"output directory {out} contains {q}; choose a new directory for the output"
+            )
+    if out.exists() or out.is_symlink():
+        if not out.is_dir() or out.is_symlink():
+            raise OutputDirError(f"output path {out} exists and is not a directory")
+        if not force and not _is_empty_dir(out):
+            raise OutputDirError(
+                f"output directory {out} exists and is not empty; use --force to replace it"
+            )
+    parent = out.parent
+    if parent.exists() and not parent.is_dir():
+        raise OutputDirError(f"cannot create {out}: {parent} is not a directory")
+    anc = parent
+    while not anc.exists():
+        anc = anc.parent
+    if not os.access(anc, os.W_OK | os.X_OK):
+        raise OutputDirError(f"cannot create {out}: {anc} is not writable")
+    return out
+
+
+@contextmanager
+def atomic_output_dir(outdir: str | os.PathLike[str], force: bool = False) -> Iterator[Path]:
+    """Context manager yielding a temporary directory that becomes ``outdir`` on success.
+
+    Parameters
+    ----------
+    outdir : path
+        Final output directory.
+    force : bool
+        Replace an existing non-empty ``outdir`` (only once the block has succeeded).
+
+    Yields
+    ------
+    Path
+        The temporary directory to write into.
+
+    Raises
+    ------
+    OutputDirError
+        As :func:`check_output_dir`, on entry and again just before the rename (in
+        case another process created ``outdir`` meanwhile).
+
+    Examples
+    --------
+    >>> with atomic_output_dir("out") as tmp:          # doctest: +SKIP
+    ...     (tmp / "result.txt").write_text("done")
+    """
+    out = check_output_dir(outdir, force)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.tmp-"))
+    try:
+        yield tmp
+        _commit(tmp, out, force)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _commit(tmp: Path, out: Path, force: bool) -> None:
+    """Rename ``tmp`` to ``out``, replacing an old ``out`` only if ``force``."""
+    os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; give the usual mode
+    if out.exists() or out.is_symlink():
+        if not out.is_dir() or out.is_symlink():
+            raise OutputDirError(f"output path {out} exists and is not a directory")
+        if _is_empty_dir(out):
+            out.rmdir()
+        elif not force:
+            raise OutputDirError(
+                f"output directory {out} appeared during the run and is not empty; "
+                "use --force to replace it"
+            )
+        else:
+            old = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.old-"))
+            old.rmdir()
+            os.replace(out, old)  # move the old output aside ...
+            try:
+                os.replace(tmp, out)  # ... put the new one in place ...
+            except BaseException:
+                os.replace(old, out)  # ... or restore the old one
+                raise
+            shutil.rmtree(old, ignore_errors=True)
+            return
+    os.replace(tmp, out)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def write_outputs(
+    result: Result,
+    outdir: str | os.PathLike[str],
+    *,
+    times: Sequence[float] = (),
+    figures: bool = True,
+    vtk: bool = True,
+    extra: dict[str, Any] | None = None,
+) -> dict[str, list[str]]:
+    """Write the standard output of one run into an existing directory.
+
+    ``result.npz`` and ``summary.json`` (:func:`vemwear.post.save_result`), the figures
+    (contact profiles at ``times``, displacement and deformed mesh at the final level,
+    time history; see :data:`FIGURE_NAMES`) and the VTK series (``solution.pvd`` and
+    ``solution/*.vtu``).
+
+    Parameters
+    ----------
+    result : Result
+        The finished run.
+    outdir : path
+        Directory to write into (normally the temporary one of
+        :func:`atomic_output_dir`).
+    times : sequence of float
+        Times of the contact-profile figure (levels of the time grid); default: T.
+    figures, vtk : bool
+        Whether to write the figures and the VTK series.
+    extra : dict, optional
+        Stored under ``inputs.extra`` in ``summary.json``.
+
+    Returns
+    -------
+    dict
+        ``{"data": [...], "figures": [...], "vtk": [...]}``: names relative to ``outdir``.
+    """
+    from .. import post
+
+    out = Path(outdir)
+    written: dict[str, list[str]] = {"data": [], "figures": [], "vtk": []}
+    post.save_result(result, out, extra=extra)
+    written["data"] += ["result.npz", "summary.json"]
+    if figures:
+        _use_agg()
+        last = len(result.t) - 1
+        tl = list(times) if len(times) else [float(result.t[-1])]
+        post.plot_contact_profiles(result, tl, out / FIGURE_NAMES["contact_profiles"])
+        post.plot_displacement(result, last, out / FIGURE_NAMES["displacement"])
+        post.plot_deformed(result, last, out / FIGURE_NAMES["deformed"])
+        post.plot_time_history(result, out / FIGURE_NAMES["time_history"])
+        written["figures"] += list(FIGURE_NAMES.values())
+    if vtk:
+        pvd = post.write_vtk_series(result, out)
+        written["vtk"].append(os.path.relpath(pvd, out))
+    return written
+
+
+def _use_agg() -> None:
+    """Select the non-interactive Agg backend unless the user chose one."""
+    if "MPLBACKEND" in os.environ:
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")

@@ -1,0 +1,655 @@
+"""Figures of a run: contact profiles (paper Figs 3-6, 9), displacement maps (Figs 7-8),
+the deformed mesh and time histories.
+
+Every function builds a :class:`matplotlib.figure.Figure` directly (no ``pyplot``, so
+no global backend or figure registry is touched and nothing needs a display), returns
+it, and saves it when ``path`` is given (format from the suffix, PNG by default, at
+150 dpi). Titles state the data: ``mu``, ``kappa`` and ``v*`` of the problem.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from matplotlib import colormaps
+from matplotlib.axes import Axes
+from matplotlib.collections import LineCollection, PolyCollection
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
+from matplotlib.tri import Triangulation
+from numpy.typing import NDArray
+
+from ..mesh.polymesh import Mesh
+
+if TYPE_CHECKING:
+    from ..simulate.loop import Result
+
+__all__ = [
+    "QUANTITIES",
+    "compare_profiles",
+    "plot_contact_profiles",
+    "plot_deformed",
+    "plot_displacement",
+    "plot_time_history",
+]
+
+DPI = 150
+
+#: Quantities along Gamma_C that :func:`compare_profiles` plots, with their labels.
+QUANTITIES: dict[str, str] = {
+    "wear": r"wear $w$",
+    "u_nu": r"normal displacement $u_\nu$",
+    "penetration": r"penetration $u_\nu - w$",
+    "lam": r"rigid-layer pressure $\lambda$",
+    "p": r"soft-layer pressure $p(u_\nu - w)$",
+}
+
+_ABSCISSA_LABEL = {
+    "x": r"$x_1$",
+    "y": r"$x_2$",
+    "s": r"arc length $s$ along $\Gamma_C$",
+}
+
+# ---------------------------------------------------------------------------- helpers
+
+
+def _cap(text: str) -> str:
+    return text[:1].upper() + text[1:]
+
+
+def _fmt_num(v: float) -> str:
+    return f"{v:.3g}"
+
+
+def _fmt_nodal(v: NDArray[np.float64]) -> str:
+    v = np.asarray(v, dtype=float)
+    if v.size == 0:
+        return "-"
+    lo, hi = float(v.min()), float(v.max())
+    if hi - lo <= 1e-12 * max(abs(hi), 1.0):
+        return _fmt_num(hi)
+    return f"{_fmt_num(lo)}..{_fmt_num(hi)}"
+
+
+def _fmt_vstar(result: Result) -> str | None:
+    desc = result.problem.v_star.describe()  # type: ignore[union-attr]
+    if isinstance(desc, list) and len(desc) == 2 and all(isinstance(c, float) for c in desc):
+        return "(" + ", ".join(f"{c:g}" for c in desc) + ")"
+    return None
+
+
+def _params(result: Result, vstar: bool = True) -> str:
+    """``mu = .., kappa = .., v* = ..`` in mathtext, for titles and legends."""
+    nodal = result.problem.nodal
+    parts = [rf"$\mu$ = {_fmt_nodal(nodal['mu'])}", rf"$\kappa$ = {_fmt_nodal(nodal['kappa'])}"]
+    vs = _fmt_vstar(result) if vstar else None
+    if vs is not None:
+        parts.append(rf"$\mathbf{{v}}^*$ = {vs}")
+    return ", ".join(parts)
+
+
+def _finish(fig: Figure, path: str | os.PathLike[str] | None) -> Figure:
+    if path is not None:
+        p = Path(path)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(p, dpi=DPI)
+    return fig
+
+
+def _abscissa(result: Result, abscissa: str = "auto") -> tuple[NDArray[np.float64], str]:
+    """Coordinate along Gamma_C: ``x`` (``x_1``) on a horizontal straight contact part,
+    ``y`` on a vertical one, the arc length ``s`` otherwise (or as asked)."""
+    pts = np.asarray(result.contact_points, dtype=float)
+    if abscissa == "auto":
+        size = float(np.ptp(np.asarray(result.points), axis=0).max()) or 1.0
+        tol = 1e-9 * size
+        if np.ptp(pts[:, 1]) <= tol:
+            abscissa = "x"
+        elif np.ptp(pts[:, 0]) <= tol:
+            abscissa = "y"
+        else:
+            abscissa = "s"
+    if abscissa == "x":
+        return pts[:, 0], abscissa
+    if abscissa == "y":
+        return pts[:, 1], abscissa
+    if abscissa == "s":
+        return np.asarray(result.contact_s, dtype=float), abscissa
+    raise ValueError(f"abscissa must be 'auto', 'x', 'y' or 's', got {abscissa!r}")
+
+
+def _extent(result: Result, which: str) -> tuple[float, float]:
+    """Range of the abscissa over the whole contact part (including endpoints on Gamma_D,
+    where there is no contact node), with a small margin."""
+    mesh = result.problem.mesh
+    if which == "s":
+        lo, hi = 0.0, float(np.max(result.contact_s, initial=0.0))
+        ce = mesh.part_edges("contact")
+        if len(ce):  # a chain may end on Gamma_D, beyond its last contact node
+            lengths = np.linalg.norm(mesh.points[ce[:, 1]] - mesh.points[ce[:, 0]], axis=1)
+            hi = max(hi, *(float(lengths[ch].sum()) for ch in _edge_chains(ce)))
+    else:
+        k = 0 if which == "x" else 1
+        v = mesh.points[np.unique(mesh.part_edges("contact")), k]
+        if v.size == 0:
+            v = np.asarray(result.contact_points)[:, k]
+        lo, hi = float(v.min()), float(v.max())
+    pad = 0.01 * (hi - lo if hi > lo else 1.0)
+    return lo - pad, hi + pad
+
+
+def _chain_breaks(result: Result) -> NDArray[np.int64]:
+    """Indices where a new chain of contact edges starts (arc length restarts)."""
+    s = np.asarray(result.contact_s, dtype=float)
+    return np.flatnonzero(np.diff(s) <= 0) + 1
+
+
+def _broken(
+    x: NDArray[np.float64], y: NDArray[np.float64], breaks: NDArray[np.int64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Insert NaN between chains so that lines do not join separate pieces of Gamma_C."""
+    if breaks.size == 0:
+        return x, y
+    return np.insert(x.astype(float), breaks, np.nan), np.insert(y.astype(float), breaks, np.nan)
+
+
+def _contact_quantity(result: Result, name: str) -> NDArray[np.float64]:
+    if name not in QUANTITIES:
+        raise ValueError(f"unknown quantity {name!r}; expected one of {list(QUANTITIES)}")
+    return np.asarray(getattr(result, name), dtype=float)
+
+
+def _time_colors(k: int) -> list[Any]:
+    cmap = colormaps["viridis"]
+    return [cmap(v) for v in np.linspace(0.8, 0.0, k)] if k > 1 else [cmap(0.3)]
+
+
+def _marker_kw(m: int) -> dict[str, Any]:
+    return {"marker": "o", "markersize": 2.5} if m <= 80 else {}
+
+
+def _default_times(result: Result) -> list[float]:
+    """``T/4, T/2, 3T/4, T`` if they are levels, else four evenly spaced levels."""
+    t = np.asarray(result.t)
+    T = float(t[-1])
+    want = [0.25 * T, 0.5 * T, 0.75 * T, T]
+    try:
+        result.problem.time.index(want)
+        return want
+    except ValueError:
+        idx = np.unique(np.linspace(0, len(t) - 1, 5).round().astype(int)[1:])
+        return [float(t[i]) for i in idx]
+
+
+# ---------------------------------------------------------------------------- profiles
+
+
+def plot_contact_profiles(
+    result: Result,
+    times: Sequence[float] | None = None,
+    path: str | os.PathLike[str] | None = None,
+    title: str | None = None,
+    *,
+    abscissa: str = "auto",
+) -> Figure:
+    """Wear ``w`` and penetration ``u_nu - w`` along Gamma_C at some times (paper Figs 3-5).
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    times : sequence of float, optional
+        Times to show; each must be a time level (``result.level(t)``). Default:
+        ``T/4, T/2, 3T/4, T`` (or four evenly spaced levels if those are not levels).
+    path : path, optional
+        Save the figure there.
+    title : str, optional
+        Figure title; default names the data (``mu``, ``kappa``, ``v*``).
+    abscissa : {"auto", "x", "y", "s"}
+        Horizontal coordinate: ``x_1``, ``x_2`` or the arc length ``s`` along Gamma_C;
+        ``auto`` takes ``x_1`` (``x_2``) on a horizontal (vertical) straight contact
+        part and ``s`` otherwise.
+
+    Returns
+    -------
+    Figure
+        Two panels side by side, one line per time.
+    """
+    times = _default_times(result) if times is None else list(times)
+    levels = [result.level(t) for t in times]
+    x, which = _abscissa(result, abscissa)
+    order = np.argsort(x, kind="stable") if which != "s" else np.arange(len(x))
+    breaks = _chain_breaks(result) if which == "s" else np.zeros(0, np.int64)
+    fig = Figure(figsize=(10.0, 3.9), layout="constrained")
+    axes = fig.subplots(1, 2, sharex=True)
+    colors = _time_colors(len(levels))
+    mk = _marker_kw(len(x))
+    for ax, name in zip(axes, ("wear", "penetration"), strict=True):
+        data = _contact_quantity(result, name)
+        for lv, c in zip(levels, colors, strict=True):
+            xs, ys = _broken(x[order], data[lv][order], breaks)
+            ax.plot(xs, ys, color=c, lw=1.6, label=f"$t$ = {result.t[lv]:g}", **mk)
+        ax.set_xlabel(_ABSCISSA_LABEL[which])
+        ax.set_ylabel(QUANTITIES[name])
+        ax.set_title(_cap(QUANTITIES[name]) + r" on $\Gamma_C$")
+        ax.grid(True, lw=0.4, alpha=0.5)
+        ax.set_xlim(*_extent(result, which))
+    axes[0].legend(loc="best", frameon=False)
+    fig.suptitle(title if title is not None else f"Wear and penetration: {_params(result)}")
+    return _finish(fig, path)
+
+
+def compare_profiles(
+    results: Mapping[str, Result],
+    time: float,
+    quantity: str | Sequence[str] = "wear",
+    path: str | os.PathLike[str] | None = None,
+    *,
+    style: str = "line",
+    abscissa: str = "auto",
+    title: str | None = None,
+) -> Figure:
+    """Overlay quantities along Gamma_C at one time for several runs (paper Figs 6 and 9).
+
+    Parameters
+    ----------
+    results : mapping of str to Result
+        Runs by legend label.
+    time : float
+        A time level of every run.
+    quantity : str or sequence of str
+        One or more of ``wear``, ``u_nu``, ``penetration``, ``lam``, ``p``. With
+        several, each run gets one colour and each quantity one marker/line style
+        (Fig 9 shows ``("wear", "u_nu")`` for two meshes).
+    path : path, optional
+        Save the figure there.
+    style : {"line", "scatter"}
+        Lines with small markers, or markers only (Fig 9).
+    abscissa : {"auto", "x", "y", "s"}
+        As in :func:`plot_contact_profiles`; ``auto`` is decided on the first run.
+    title : str, optional
+        Default: the quantity, the time and the data shared by all runs.
+
+    Returns
+    -------
+    Figure
+    """
+    if not results:
+        raise ValueError("compare_profiles: no results given")
+    if style not in ("line", "scatter"):
+        raise ValueError(f"style must be 'line' or 'scatter', got {style!r}")
+    quantities = [quantity] if isinstance(quantity, str) else list(quantity)
+    for q in quantities:
+        _contact_quantity(next(iter(results.values())), q)  # validates the names
+    first = next(iter(results.values()))
+    _x0, which = _abscissa(first, abscissa)
+    params = {label: _params(r) for label, r in results.items()}
+    common = len(set(params.values())) == 1
+    fig = Figure(figsize=(7.0, 4.2), layout="constrained")
+    ax = fig.subplots()
+    markers = ["o", "s", "^", "D", "v"]
+    linestyles = ["-", "--", ":", "-.", (0, (5, 1, 1, 1))]
+    colors = colormaps["tab10"].colors  # type: ignore[attr-defined]
+    for i, (label, res) in enumerate(results.items()):
+        lv = res.level(time)
+        x, _w = _abscissa(res, which)
+        order = np.argsort(x, kind="stable") if which != "s" else np.arange(len(x))
+        breaks = _chain_breaks(res) if which == "s" else np.zeros(0, np.int64)
+        for j, q in enumerate(quantities):
+            y = _contact_quantity(res, q)[lv]
+            name = label if len(quantities) == 1 else f"{label}, {QUANTITIES[q]}"
+            if not common:
+                name += f" ({_params(res, vstar=False)})"
+            # runs differ by colour, marker and (decreasing) size, so that coinciding
+            # profiles stay visible; quantities by line style / marker fill
+            c = colors[i % len(colors)]
+            mk = markers[i % len(markers)]
+            shrink = 0.72**i
+            if style == "scatter":
+                ax.scatter(x, y, s=max(36.0 * shrink, 6.0), marker=mk, lw=1.0, label=name,
+                           edgecolors=c, facecolors=c if j % 2 == 0 else "none", zorder=2 + i)
+            else:
+                xs, ys = _broken(x[order], y[order], breaks)
+                kw: dict[str, Any] = {}
+                if len(x) <= 80:
+                    kw = {"marker": mk, "markersize": max(5.0 * shrink, 2.0),
+                          "markerfacecolor": c if j % 2 == 0 else "white"}
+                ax.plot(xs, ys, color=c, lw=max(2.2 * shrink, 0.9),
+                        ls=linestyles[j % len(linestyles)], label=name, zorder=2 + i, **kw)
+    ax.set_xlabel(_ABSCISSA_LABEL[which])
+    ax.set_ylabel(QUANTITIES[quantities[0]] if len(quantities) == 1 else "value")
+    ax.grid(True, lw=0.4, alpha=0.5)
+    ax.set_xlim(*_extent(first, which))
+    ax.legend(loc="best", frameon=False, fontsize="small")
+    if title is None:
+        what = (QUANTITIES[quantities[0]] if len(quantities) == 1
+                else " and ".join(QUANTITIES[q] for q in quantities))
+        title = f"{_cap(what)} at $t$ = {time:g}"
+        if common:
+            title += f": {params[next(iter(results))]}"
+    ax.set_title(title)
+    return _finish(fig, path)
+
+
+# ---------------------------------------------------------------------------- mesh maps
+
+
+def _fan_triangulation(
+    mesh: Mesh, xy: NDArray[np.float64] | None = None
+) -> tuple[Triangulation, Callable[[NDArray[np.float64]], NDArray[np.float64]]]:
+    """Triangulate every cell: triangles as they are, other polygons as a fan around the
+    vertex average. Returns the Triangulation and a function extending vertex values
+    to the added centre points (by the vertex average, the value of ``Pi u`` there)."""
+    pts = mesh.points if xy is None else xy
+    tris: list[NDArray[np.int64]] = []
+    centre_cells: list[NDArray[np.int64]] = []  # (m, n) vertex ids of fanned cells
+    next_id = mesh.n_points
+    for n, (_ids, verts) in sorted(mesh.groups.items()):
+        if n == 3:
+            tris.append(verts)
+            continue
+        m = len(verts)
+        centre = next_id + np.arange(m)
+        next_id += m
+        t = np.stack(
+            [verts, np.roll(verts, -1, axis=1), np.broadcast_to(centre[:, None], (m, n))], axis=-1
+        )
+        tris.append(t.reshape(-1, 3))
+        centre_cells.append(verts)
+
+    def extend(values: NDArray[np.float64]) -> NDArray[np.float64]:
+        extra = [values[v].mean(axis=1) for v in centre_cells]
+        return np.concatenate([values, *extra]) if extra else values
+
+    allpts = extend(pts)
+    tri = Triangulation(allpts[:, 0], allpts[:, 1], np.concatenate(tris))
+    return tri, extend
+
+
+def _cell_outlines(ax: Axes, mesh: Mesh, xy: NDArray[np.float64], **kw: Any) -> None:
+    """Draw the cell edges (each edge once) as one LineCollection."""
+    e = mesh.edges
+    ax.add_collection(LineCollection(np.stack([xy[e[:, 0]], xy[e[:, 1]]], axis=1), **kw))
+
+
+def _edge_width(mesh: Mesh) -> float:
+    return float(np.clip(12.0 / np.sqrt(max(mesh.n_cells, 1)), 0.08, 0.6))
+
+
+def _mesh_of(result: Result) -> Mesh:
+    return result.problem.mesh
+
+
+def plot_displacement(
+    result: Result,
+    level: int = -1,
+    path: str | os.PathLike[str] | None = None,
+    component: int | str | None = None,
+    *,
+    cmap: str = "viridis",
+    edges: bool | None = None,
+) -> Figure:
+    """Colour maps of the displacement components on the polygonal mesh (paper Figs 7-8).
+
+    Values are the vertex values (the VEM degrees of freedom), shaded linearly
+    (Gouraud) over a fan triangulation of every polygon around its vertex average,
+    where the value is the vertex average (the projection ``Pi u`` there).
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    level : int
+        Time level index (negative counts from the end); use ``result.level(t)`` for a
+        time.
+    path : path, optional
+        Save the figure there.
+    component : {None, 0, 1, "magnitude"}
+        Both components ``u_1``, ``u_2`` side by side (default), one of them, or
+        ``|u|``.
+    cmap : str
+        Matplotlib colormap.
+    edges : bool, optional
+        Draw the cell edges; default for meshes of at most 4096 cells.
+
+    Returns
+    -------
+    Figure
+    """
+    mesh = _mesh_of(result)
+    lv = int(level) % len(result.t)
+    u = np.asarray(result.u[lv])
+    if component is None:
+        comps: list[int | str] = [0, 1]
+    elif component in (0, 1, "magnitude"):
+        comps = [component]
+    else:
+        raise ValueError(f"component must be None, 0, 1 or 'magnitude', got {component!r}")
+    tri, extend = _fan_triangulation(mesh)
+    lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
+    ext = np.maximum(hi - lo, 1e-300)
+    aspect = float(ext[1] / ext[0])
+    pw = 5.6 if len(comps) > 1 else 6.6  # inches per panel, of which ~1.5 go to labels/bar
+    fig = Figure(figsize=(pw * len(comps), min((pw - 1.5) * aspect, 7.0) + 1.2),
+                 layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, len(comps)))
+    show_edges = mesh.n_cells <= 4096 if edges is None else edges
+    labels = {0: r"$u_{h,1}$", 1: r"$u_{h,2}$", "magnitude": r"$|\mathbf{u}_h|$"}
+    for ax, c in zip(axes, comps, strict=True):
+        vals = np.linalg.norm(u, axis=1) if c == "magnitude" else u[:, int(c)]
+        tpc = ax.tripcolor(tri, extend(vals), shading="gouraud", cmap=cmap, rasterized=True)
+        if show_edges:
+            _cell_outlines(ax, mesh, mesh.points, colors="k", linewidths=_edge_width(mesh),
+                           alpha=0.35)
+        ax.set_aspect("equal")
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+        ax.set_xlabel(r"$x_1$")
+        ax.set_ylabel(r"$x_2$")
+        ax.set_title(labels[c])
+        cax = ax.inset_axes((1.03, 0.0, 0.035, 1.0))  # exactly as tall as the plot
+        cb = fig.colorbar(tpc, cax=cax)
+        cb.formatter.set_powerlimits((-2, 3))  # type: ignore[attr-defined]
+        cb.update_ticks()
+    counts = ", ".join(f"{len(i)} {_ngon(n)}" for n, (i, _v) in sorted(mesh.groups.items()))
+    fig.suptitle(
+        f"Displacement at $t$ = {result.t[lv]:g} ({counts}): {_params(result)}"
+    )
+    return _finish(fig, path)
+
+
+def _ngon(n: int) -> str:
+    return {3: "triangles", 4: "quads", 5: "pentagons", 6: "hexagons"}.get(n, f"{n}-gons")
+
+
+def _edge_chains(edges: NDArray[np.int64]) -> list[NDArray[np.int64]]:
+    """Split directed edges (a, b) into chains of consecutive edges; returns the edge
+    indices of every chain in order (a closed loop gives one chain)."""
+    nxt = {int(a): k for k, a in enumerate(edges[:, 0])}
+    ends = {int(b) for b in edges[:, 1]}
+    seen = np.zeros(len(edges), dtype=bool)
+    starts = [k for k, a in enumerate(edges[:, 0]) if int(a) not in ends]
+    chains: list[NDArray[np.int64]] = []
+    for first in [*starts, *range(len(edges))]:
+        if seen[first]:
+            continue
+        chain, k = [], first
+        while k is not None and not seen[k]:
+            seen[k] = True
+            chain.append(k)
+            k = nxt.get(int(edges[k, 1]))
+        chains.append(np.asarray(chain, dtype=np.int64))
+    return chains
+
+
+def _polyline(segments: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(k, 2, 2) consecutive segments -> (k + 1, 2) polyline."""
+    return np.concatenate([segments[:, 0], segments[-1:, 1]])
+
+
+def _rigid_layer(
+    result: Result, edges: NDArray[np.int64], scale: float, band: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Segments ``x + scale g nu`` over the contact edges (the magnified constraint
+    ``u_nu = g``) and the same segments moved ``band`` further out, shape (E, 2, 2).
+    Contact nodes use their nodal normal and g; an endpoint on Gamma_D (not a contact
+    node) takes the edge normal and the g of the other endpoint."""
+    P = result.problem.mesh.points
+    g = np.asarray(result.problem.nodal["g"])
+    nu_nodes = np.asarray(result.problem.contact.normals)
+    where = np.full(len(P), -1, dtype=np.int64)
+    where[np.asarray(result.contact_nodes)] = np.arange(len(g))
+    d = P[edges[:, 1]] - P[edges[:, 0]]
+    nu_edge = np.column_stack([d[:, 1], -d[:, 0]]) / np.linalg.norm(d, axis=1)[:, None]
+    idx = where[edges]  # (E, 2)
+    other = idx[:, ::-1]
+    gi = np.where(idx >= 0, g[np.maximum(idx, 0)], g[np.maximum(other, 0)])
+    nui = np.where((idx >= 0)[..., None], nu_nodes[np.maximum(idx, 0)], nu_edge[:, None, :])
+    rigid = P[edges] + scale * gi[..., None] * nui
+    return rigid, rigid + band * nui
+
+
+def plot_deformed(
+    result: Result,
+    level: int = -1,
+    path: str | os.PathLike[str] | None = None,
+    scale: float | None = None,
+    *,
+    show_rigid: bool | None = None,
+) -> Figure:
+    """The mesh before (light grey) and after deformation, with Gamma_C marked.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    level : int
+        Time level index (negative counts from the end).
+    path : path, optional
+        Save the figure there.
+    scale : float, optional
+        Displacement magnification; default: the largest displacement drawn as 10% of
+        the domain size (1 if the displacement vanishes).
+    show_rigid : bool, optional
+        Draw where the constraint ``u_nu = g`` (the rigid part of the foundation) lies
+        in the magnified picture, i.e. at ``x + scale * g * nu`` along Gamma_C. Default:
+        if that line lies within 30% of the domain size.
+
+    Returns
+    -------
+    Figure
+    """
+    mesh = _mesh_of(result)
+    lv = int(level) % len(result.t)
+    u = np.asarray(result.u[lv])
+    P = mesh.points
+    size = float(np.ptp(P, axis=0).max()) or 1.0
+    umax = float(np.linalg.norm(u, axis=1).max(initial=0.0))
+    if scale is None:
+        scale = 0.1 * size / umax if umax > 0 else 1.0
+    Q = P + scale * u
+    lo = np.minimum(P.min(axis=0), Q.min(axis=0))
+    hi = np.maximum(P.max(axis=0), Q.max(axis=0))
+    aspect = float((hi - lo)[1] / max((hi - lo)[0], 1e-300))
+    fig = Figure(figsize=(8.0, min(8.0 * aspect, 8.0) + 1.2), layout="constrained")
+    ax = fig.subplots()
+    lw = _edge_width(mesh) * 1.6
+    if mesh.n_cells <= 5000:  # finer meshes: outlines only, inner edges would fill the area
+        _cell_outlines(ax, mesh, P, colors="0.72", linewidths=lw)
+        _cell_outlines(ax, mesh, Q, colors="#1f4e79", linewidths=lw)
+    be = mesh.boundary_edges
+    for X, color in ((P, "0.6"), (Q, "#1f4e79")):
+        ax.add_collection(LineCollection(X[be], colors=color, linewidths=1.2))
+    ce = mesh.part_edges("contact")
+    chains = _edge_chains(ce)
+    for X, kw in ((P, {"color": "#f4a582", "lw": 2.0, "ls": "--"}),
+                  (Q, {"color": "#b2182b", "lw": 2.2})):
+        for ch in chains:
+            line = _polyline(X[ce[ch]])
+            ax.plot(line[:, 0], line[:, 1], solid_capstyle="butt", **kw)
+    handles = [
+        Line2D([], [], color="0.6", lw=1.2, label="reference"),
+        Line2D([], [], color="#1f4e79", lw=1.2, label="deformed"),
+        Line2D([], [], color="#b2182b", lw=2.2, label=r"$\Gamma_C$ deformed"),
+        Line2D([], [], color="#f4a582", lw=2.0, ls="--", label=r"$\Gamma_C$ reference"),
+    ]
+    g = np.asarray(result.problem.nodal["g"])
+    if show_rigid is None:
+        show_rigid = bool(scale * g.max(initial=0.0) <= 0.3 * size)
+    if show_rigid and len(ce):
+        rigid, outer = _rigid_layer(result, ce, scale, 0.025 * size)
+        for ch in chains:
+            r, o = _polyline(rigid[ch]), _polyline(outer[ch])
+            ax.plot(r[:, 0], r[:, 1], color="k", lw=1.0, ls=(0, (4, 2)))
+            ax.add_collection(PolyCollection([np.concatenate([r, o[::-1]])],
+                                             facecolors="0.55", alpha=0.35, linewidths=0))
+        handles.append(Line2D([], [], color="k", lw=1.0, ls=(0, (4, 2)),
+                              label=r"rigid layer $u_\nu = g$ (magnified)"))
+        lo = np.minimum(lo, outer.reshape(-1, 2).min(axis=0))
+        hi = np.maximum(hi, outer.reshape(-1, 2).max(axis=0))
+    pad = 0.03 * size
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel(r"$x_1$")
+    ax.set_ylabel(r"$x_2$")
+    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize="small",
+               frameon=False)
+    ax.set_title(f"Deformed mesh at $t$ = {result.t[lv]:g}: {_params(result)}\n"
+                 f"displacement magnified × {scale:.3g} (max $|\\mathbf{{u}}_h|$ = {umax:.3g})",
+                 fontsize="medium")
+    return _finish(fig, path)
+
+
+def plot_time_history(
+    result: Result,
+    path: str | os.PathLike[str] | None = None,
+) -> Figure:
+    """Maximal wear and penetration along Gamma_C against time, and solver iterations.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    path : path, optional
+        Save the figure there.
+
+    Returns
+    -------
+    Figure
+        Left axis: ``max w``, ``max (u_nu - w)`` and ``max u_nu`` over the contact
+        nodes; right axis: iterations per level (bars).
+    """
+    t = np.asarray(result.t)
+    fig = Figure(figsize=(7.5, 4.2), layout="constrained")
+    ax = fig.subplots()
+    ax2 = ax.twinx()
+    it = np.asarray(result.iterations)
+    width = np.diff(t).min(initial=1.0) * 0.8 if len(t) > 1 else 1.0
+    ax2.bar(t, it, width=width, color="0.6", alpha=0.35, label="solver iterations", zorder=0)
+    ax2.set_ylabel("solver iterations per level")
+    ax2.yaxis.set_major_locator(MaxNLocator(integer=True))
+    ax2.set_ylim(0, max(int(it.max(initial=1)), 1) * 2.2)
+    ax.set_zorder(ax2.get_zorder() + 1)
+    ax.patch.set_visible(False)
+    ax.plot(t, np.asarray(result.wear).max(axis=1), color="#b2182b", lw=1.8,
+            label=r"max $w$")
+    ax.plot(t, np.asarray(result.penetration).max(axis=1), color="#2166ac", lw=1.8,
+            label=r"max $(u_\nu - w)$")
+    ax.plot(t, np.asarray(result.u_nu).max(axis=1), color="0.2", lw=1.2, ls="--",
+            label=r"max $u_\nu$")
+    ax.set_xlabel(r"time $t$")
+    ax.set_ylabel(r"max over $\Gamma_C$")
+    ax.grid(True, lw=0.4, alpha=0.5)
+    ax.set_xlim(t[0] - 0.6 * width, t[-1] + 0.6 * width)
+    ax.set_ylim(bottom=0)
+    h1, l1 = ax.get_legend_handles_labels()
+    h2, l2 = ax2.get_legend_handles_labels()
+    fig.legend(h1 + h2, l1 + l2, loc="outside lower center", ncols=4, frameon=False)
+    ax.set_title(f"Time history: {_params(result)}")
+    return _finish(fig, path)

@@ -1,0 +1,354 @@
+"""Saving a run to disk and reading it back: ``result.npz`` and ``summary.json``.
+
+:func:`save_result` writes two files into an output directory.
+
+``result.npz``
+    A NumPy archive (read it with :func:`load_result` or ``numpy.load``), holding
+    plain arrays only (no pickles). ``L`` is the number of time levels
+    (``t_0 = 0, ..., t_N = T``), ``n`` the number of mesh vertices, ``m`` the number
+    of contact nodes (the vertices on the closure of Gamma_C that are not on the
+    closure of Gamma_D, ordered along Gamma_C).
+
+    The model is written in consistent units: lengths in the unit of the mesh
+    coordinates, time in the unit of ``t``, and stresses/pressures in the unit of the
+    Lamé coefficients ``lam``, ``eta`` (e.g. m, s and Pa). The paper's examples are
+    dimensionless.
+
+    ==========================  =========  ============================================
+    array                       shape      meaning
+    ==========================  =========  ============================================
+    ``t``                       (L,)       time levels ``t_n`` [time]
+    ``points``                  (n, 2)     vertex coordinates of the reference
+                                           (undeformed) mesh [length]
+    ``cells_offsets``           (C + 1,)   CSR offsets of the ``C`` polygonal cells:
+                                           cell ``k`` has the vertices
+                                           ``cells_vertices[cells_offsets[k]:``
+                                           ``cells_offsets[k + 1]]``
+    ``cells_vertices``          (sum n_K,) concatenated counter-clockwise vertex ids
+    ``boundary_tags``           (B,)       part code of every boundary edge (1 clamped,
+                                           2 traction, 3 contact, 0 untagged), in the
+                                           canonical order of ``Mesh.boundary_edges``;
+                                           see :func:`mesh_from_arrays`
+    ``u``                       (L, n, 2)  displacement ``u_h(t_n)`` at the vertices
+                                           (the VEM degrees of freedom) [length]
+    ``contact_nodes``           (m,)       vertex ids of the contact nodes
+    ``contact_s``               (m,)       arc length along Gamma_C from the start of
+                                           the node's chain of contact edges [length]
+    ``contact_points``          (m, 2)     coordinates of the contact nodes [length]
+    ``contact_normals``         (m, 2)     unit outward normals ``nu_a``
+    ``contact_weights``         (m,)       nodal quadrature weights ``omega_a`` (half
+                                           the lengths of the adjacent contact edges)
+                                           [length]; ``sum(omega * w)`` is the worn
+                                           area (volume per unit depth)
+    ``g``, ``mu``, ``kappa``    (m,)       layer thickness [length], friction and wear
+                                           coefficients at the contact nodes
+    ``wear``                    (L, m)     wear ``w^n`` of the soft layer (the depth of
+                                           material removed) [length]; ``w^0 = 0``
+    ``u_nu``                    (L, m)     normal displacement ``u_nu(t_n) = u . nu_a``
+                                           [length]; the unilateral constraint is
+                                           ``u_nu <= g``
+    ``penetration``             (L, m)     ``u_nu - wear``: the penetration into the
+                                           soft layer, the argument of the normal
+                                           compliance ``p`` [length]
+    ``lam``                     (L, m)     pressure of the rigid layer, the multiplier
+                                           of ``u_nu <= g`` (``>= 0``, zero where
+                                           ``u_nu < g``) [stress]
+    ``p``                       (L, m)     pressure of the soft layer,
+                                           ``p(u_nu - wear)`` [stress]
+    ``iterations``              (L,)       solver iterations of each step problem
+    ``residuals``               (L, 3)     final scaled KKT residuals of each step, in
+                                           the order of ``residual_names``
+    ``residual_names``          (3,)       ``equilibrium``, ``feasibility``,
+                                           ``complementarity``
+    ``vemwear_version``         ()         version string of the writer
+    ==========================  =========  ============================================
+
+``summary.json``
+    A JSON object with the keys ``format`` (``"vemwear-result/1"``), ``vemwear_version``,
+    ``created`` (UTC, ISO 8601), ``inputs`` (``problem``: ``Problem.describe()``;
+    ``extra``: whatever the caller passed, e.g. the configuration), ``solver``
+    (``Result.solver``), ``statistics`` (levels, contact nodes, iteration totals, the
+    largest value of each KKT residual), ``timings`` (``Result.timings``, seconds),
+    ``outputs`` (key numbers of the solution: maximal wear at the final time and where,
+    worn area, maximal ``u_nu``, penetration, pressures and displacement) and
+    ``files``. Non-finite numbers are written as ``null``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from collections.abc import Mapping
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .. import __version__
+from ..mesh.polymesh import Mesh
+
+if TYPE_CHECKING:
+    from ..simulate.loop import Result
+
+__all__ = [
+    "NPZ_NAME",
+    "SUMMARY_NAME",
+    "load_result",
+    "load_summary",
+    "mesh_from_arrays",
+    "result_arrays",
+    "save_result",
+    "summarize",
+]
+
+#: File names written by :func:`save_result`.
+NPZ_NAME = "result.npz"
+SUMMARY_NAME = "summary.json"
+FORMAT = "vemwear-result/1"
+
+
+def result_arrays(result: Result) -> dict[str, NDArray[Any]]:
+    """The arrays stored in ``result.npz`` (see the module docstring), by name."""
+    mesh = result.problem.mesh
+    cb = result.problem.contact
+    nodal = result.problem.nodal
+    return {
+        "t": np.asarray(result.t, dtype=np.float64),
+        "points": np.asarray(result.points, dtype=np.float64),
+        "cells_offsets": np.asarray(mesh.cell_offsets, dtype=np.int64),
+        "cells_vertices": np.asarray(mesh.cell_vertices, dtype=np.int64),
+        "boundary_tags": np.asarray(mesh.boundary_tags, dtype=np.int8),
+        "u": np.asarray(result.u, dtype=np.float64),
+        "contact_nodes": np.asarray(result.contact_nodes, dtype=np.int64),
+        "contact_s": np.asarray(result.contact_s, dtype=np.float64),
+        "contact_points": np.asarray(result.contact_points, dtype=np.float64),
+        "contact_normals": np.asarray(cb.normals, dtype=np.float64),
+        "contact_weights": np.asarray(cb.weights, dtype=np.float64),
+        "g": np.asarray(nodal["g"], dtype=np.float64),
+        "mu": np.asarray(nodal["mu"], dtype=np.float64),
+        "kappa": np.asarray(nodal["kappa"], dtype=np.float64),
+        "wear": np.asarray(result.wear, dtype=np.float64),
+        "u_nu": np.asarray(result.u_nu, dtype=np.float64),
+        "penetration": np.asarray(result.penetration, dtype=np.float64),
+        "lam": np.asarray(result.lam, dtype=np.float64),
+        "p": np.asarray(result.p, dtype=np.float64),
+        "iterations": np.asarray(result.iterations, dtype=np.int64),
+        "residuals": np.asarray(result.residuals, dtype=np.float64),
+        "residual_names": np.array(result.RESIDUAL_NAMES, dtype=str),
+        "vemwear_version": np.array(__version__, dtype=str),
+    }
+
+
+def _jsonable(x: Any) -> Any:
+    """Convert NumPy scalars/arrays, paths and tuples to JSON data; non-finite -> None."""
+    if isinstance(x, Mapping):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple, set, frozenset)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _jsonable(x.tolist())
+    if isinstance(x, np.generic):
+        return _jsonable(x.item())
+    if isinstance(x, bool) or x is None or isinstance(x, (int, str)):
+        return x
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, os.PathLike):
+        return os.fspath(x)
+    if callable(x):
+        return getattr(x, "__name__", type(x).__name__)
+    return str(x)
+
+
+def _max(a: NDArray[Any]) -> float:
+    return float(np.max(a)) if np.size(a) else float("nan")
+
+
+def summarize(result: Result) -> dict[str, Any]:
+    """Statistics and key outputs of a run (the ``statistics`` and ``outputs`` of the summary).
+
+    Parameters
+    ----------
+    result : Result
+        A finished run.
+
+    Returns
+    -------
+    dict
+        ``{"statistics": {...}, "outputs": {...}}`` with plain Python numbers.
+    """
+    it = np.asarray(result.iterations)
+    res = np.asarray(result.residuals)
+    names = tuple(result.RESIDUAL_NAMES)
+    stats: dict[str, Any] = {
+        "levels": len(result.t),
+        "steps": len(result.t) - 1,
+        "contact_nodes": len(result.contact_nodes),
+        "iterations_total": int(it.sum()),
+        "iterations_max": int(it.max(initial=0)),
+        "iterations_mean": float(it.mean()) if it.size else 0.0,
+        "max_residual": {n: _max(res[:, i]) for i, n in enumerate(names)},
+    }
+    wear_T = np.asarray(result.wear[-1])
+    pen = np.asarray(result.penetration)
+    weights = np.asarray(result.problem.contact.weights)
+    unorm = np.linalg.norm(result.u, axis=-1)  # (L, n)
+    a = int(np.argmax(wear_T)) if wear_T.size else 0
+    active = np.asarray(result.problem.nodal["g"]) - np.asarray(result.u_nu[-1])
+    g_scale = float(np.max(np.abs(result.problem.nodal["g"]), initial=1.0))
+    outputs: dict[str, Any] = {
+        "t_final": float(result.t[-1]),
+        "wear_max_final": _max(wear_T),
+        "wear_max_final_at": np.asarray(result.contact_points[a]).tolist() if wear_T.size else None,
+        "wear_area_final": float(np.dot(weights, wear_T)),
+        "u_nu_max": _max(result.u_nu),
+        "u_nu_max_final": _max(result.u_nu[-1]),
+        "penetration_max": _max(pen),
+        "penetration_max_final": _max(pen[-1]),
+        "lam_max": _max(result.lam),
+        "p_max": _max(result.p),
+        "displacement_max": _max(unorm),
+        "displacement_max_final": _max(unorm[-1]),
+        "nodes_in_contact_final": int(np.sum(pen[-1] > 0)),
+        "nodes_on_rigid_layer_final": int(np.sum(active <= 1e-9 * g_scale)),
+    }
+    return {"statistics": stats, "outputs": outputs}
+
+
+def _summary(result: Result, extra: dict[str, Any] | None) -> dict[str, Any]:
+    s = summarize(result)
+    return {
+        "format": FORMAT,
+        "vemwear_version": __version__,
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+        "inputs": {"problem": result.problem.describe(), "extra": extra or {}},
+        "solver": dict(result.solver),
+        "statistics": s["statistics"],
+        "timings": dict(result.timings),
+        "outputs": s["outputs"],
+        "files": {"arrays": NPZ_NAME},
+    }
+
+
+def _temp_in(directory: Path, name: str) -> tuple[int, Path]:
+    fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{name}.", suffix=".tmp")
+    return fd, Path(tmp)
+
+
+def save_result(
+    result: Result,
+    outdir: str | os.PathLike[str],
+    extra: dict[str, Any] | None = None,
+    *,
+    compress: bool = False,
+) -> list[Path]:
+    """Write ``result.npz`` and ``summary.json`` into ``outdir``.
+
+    Both files are first written to temporary names in ``outdir`` and renamed only
+    when both are complete, so an interrupted or failed write never leaves a
+    truncated ``result.npz`` or ``summary.json`` (an older pair is replaced as a whole
+    or not at all, up to the two renames).
+
+    Parameters
+    ----------
+    result : Result
+        The run to save.
+    outdir : path
+        Output directory; created (with parents) if missing.
+    extra : dict, optional
+        JSON-friendly data stored under ``inputs.extra`` in the summary, e.g. the
+        configuration the run was made from. NumPy values and paths are converted.
+    compress : bool
+        Use ``numpy.savez_compressed`` (smaller, slower) instead of ``numpy.savez``.
+
+    Returns
+    -------
+    list of Path
+        ``[outdir / "result.npz", outdir / "summary.json"]``.
+    """
+    out = Path(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    arrays = result_arrays(result)
+    summary = _jsonable(_summary(result, extra))
+    targets = [out / NPZ_NAME, out / SUMMARY_NAME]
+    temps: list[Path] = []
+    try:
+        fd, tmp = _temp_in(out, NPZ_NAME)
+        temps.append(tmp)
+        with os.fdopen(fd, "wb") as fh:
+            (np.savez_compressed if compress else np.savez)(fh, **arrays)  # type: ignore[arg-type]
+            fh.flush()
+            os.fsync(fh.fileno())
+        fd, tmp = _temp_in(out, SUMMARY_NAME)
+        temps.append(tmp)
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(summary, fh, indent=2, allow_nan=False)
+            fh.write("\n")
+            fh.flush()
+            os.fsync(fh.fileno())
+        for tmp, target in zip(temps, targets, strict=True):
+            os.chmod(tmp, 0o644)
+            os.replace(tmp, target)
+    except BaseException:
+        for tmp in temps:
+            tmp.unlink(missing_ok=True)
+        raise
+    return targets
+
+
+def _npz_path(path: str | os.PathLike[str]) -> Path:
+    p = Path(path)
+    if p.is_dir():
+        p = p / NPZ_NAME
+    if not p.exists():
+        raise FileNotFoundError(f"result file not found: {p}")
+    return p
+
+
+def load_result(path: str | os.PathLike[str]) -> dict[str, NDArray[Any]]:
+    """Read the arrays of a saved run.
+
+    Parameters
+    ----------
+    path : path
+        The ``result.npz`` file or the directory holding it.
+
+    Returns
+    -------
+    dict of str to ndarray
+        Every array of the archive (see the module docstring), fully loaded in memory.
+        0-d string arrays (``vemwear_version``) stay 0-d arrays; use ``.item()``.
+    """
+    p = _npz_path(path)
+    with np.load(p, allow_pickle=False) as data:
+        return {k: data[k] for k in data.files}
+
+
+def load_summary(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Read ``summary.json`` (given the file or its directory)."""
+    p = Path(path)
+    if p.is_dir():
+        p = p / SUMMARY_NAME
+    with open(p, encoding="utf-8") as fh:
+        return json.load(fh)
+
+
+def mesh_from_arrays(data: Mapping[str, NDArray[Any]]) -> Mesh:
+    """Rebuild the :class:`~vemwear.mesh.Mesh` (with its boundary parts) from saved arrays.
+
+    Parameters
+    ----------
+    data : mapping
+        The output of :func:`load_result`.
+    """
+    tags = data.get("boundary_tags")
+    return Mesh(
+        np.asarray(data["points"]),
+        np.asarray(data["cells_offsets"]),
+        np.asarray(data["cells_vertices"]),
+        None if tags is None else np.asarray(tags),
+    )

@@ -1,0 +1,206 @@
+"""ParaView output: one ``.vtu`` file per time level and a ``.pvd`` collection.
+
+Every ``.vtu`` holds the polygonal mesh (triangles, quads and general polygons) with
+
+point data
+    ``displacement`` (3 components, z = 0, for the *Warp By Vector* filter),
+    ``wear``, ``u_nu``, ``penetration`` (``u_nu - wear``), ``lam`` (rigid-layer
+    pressure), ``p`` (soft-layer pressure) at the contact nodes and 0 elsewhere, and
+    ``contact`` (1 at the contact nodes, 0 elsewhere);
+cell data
+    ``strain``: the strain of the projection, ``eps(Pi u_h)`` (constant per cell, paper
+    3.8), as a 3x3 tensor (9 components, row-major; the out-of-plane entries are 0);
+    ``stress``: ``sigma = 2 eta eps + lam tr(eps) I`` in plane strain, as a 3x3
+    tensor with ``sigma_zz = lam tr(eps)``; ``von_mises``: the von Mises stress of that
+    tensor; ``cell_id``: the cell index in the :class:`~vemwear.mesh.Mesh`.
+
+The ``.pvd`` file lists the levels with their times, so ParaView shows the run as a
+time series; the ``.vtu`` files live in a sibling directory named like the series.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from collections.abc import Iterable
+from pathlib import Path
+from typing import TYPE_CHECKING
+from xml.sax.saxutils import quoteattr
+
+import meshio
+import numpy as np
+from numpy.typing import NDArray
+
+from ..mesh.io import to_meshio
+from ..mesh.polymesh import Mesh
+from ..vem.assembly import projection_coefficients
+from ..vem.local import Material
+
+if TYPE_CHECKING:
+    from ..simulate.loop import Result
+
+__all__ = ["cell_strain_stress", "write_vtk_series"]
+
+
+def cell_strain_stress(
+    mesh: Mesh, u: NDArray[np.float64], material: Material
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Projected strain, plane-strain stress and von Mises stress per cell.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    u : (n_points, 2) array
+        Vertex displacements.
+    material : Material
+        Lamé coefficients ``lam``, ``eta``.
+
+    Returns
+    -------
+    strain, stress : (n_cells, 3, 3) arrays
+        ``eps(Pi u)`` (the symmetric part of the gradient of the projection) and
+        ``sigma = 2 eta eps + lam tr(eps) I`` with ``sigma_zz = lam tr(eps)``
+        (plane strain).
+    von_mises : (n_cells,) array
+        ``sqrt(((s_xx - s_yy)^2 + (s_yy - s_zz)^2 + (s_zz - s_xx)^2) / 2 + 3 s_xy^2)``.
+    """
+    _xbar, _vbar, G = projection_coefficients(mesh, u)
+    E = 0.5 * (G + G.transpose(0, 2, 1))
+    tr = E[:, 0, 0] + E[:, 1, 1]
+    lam, eta = float(material.lam), float(material.eta)
+    strain = np.zeros((mesh.n_cells, 3, 3))
+    strain[:, :2, :2] = E
+    stress = 2.0 * eta * strain
+    stress[:, 0, 0] += lam * tr
+    stress[:, 1, 1] += lam * tr
+    stress[:, 2, 2] = lam * tr
+    sxx, syy, szz, sxy = stress[:, 0, 0], stress[:, 1, 1], stress[:, 2, 2], stress[:, 0, 1]
+    vm = np.sqrt(0.5 * ((sxx - syy) ** 2 + (syy - szz) ** 2 + (szz - sxx) ** 2) + 3.0 * sxy**2)
+    return strain, stress, vm
+
+
+def _block_order(mesh: Mesh) -> list[NDArray[np.int64]]:
+    """Cell ids of the meshio blocks of :func:`~vemwear.mesh.io.to_meshio`, in block order."""
+    return [ids for _n, (ids, _v) in sorted(mesh.groups.items())]
+
+
+def _levels(levels: Iterable[int] | None, L: int) -> list[int]:
+    if levels is None:
+        return list(range(L))
+    out: list[int] = []
+    for lv in levels:
+        i = int(lv)
+        if not -L <= i < L:
+            raise IndexError(f"level {lv} is out of range for a run with {L} time levels")
+        out.append(i % L)
+    return sorted(set(out))
+
+
+def _pvd_text(entries: list[tuple[float, str]]) -> str:
+    lines = [
+        '<?xml version="1.0"?>',
+        '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
+        "  <Collection>",
+    ]
+    for t, fname in entries:
+        lines.append(
+            f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(fname)}/>'
+        )
+    lines += ["  </Collection>", "</VTKFile>", ""]
+    return "\n".join(lines)
+
+
+def write_vtk_series(
+    result: Result,
+    outdir: str | os.PathLike[str],
+    levels: Iterable[int] | None = None,
+    name: str = "solution",
+) -> Path:
+    """Write the run as a ParaView time series.
+
+    Writes ``outdir/<name>/<name>_NNNN.vtu`` for every chosen level ``NNNN`` and the
+    collection ``outdir/<name>.pvd`` (relative file names, ``timestep`` = ``t_n``).
+    Older ``<name>_<digits>.vtu`` files in ``outdir/<name>/`` that are not part of this
+    series are removed; the ``.pvd`` is written last, under a temporary name renamed
+    into place.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    outdir : path
+        Output directory; created if missing.
+    levels : iterable of int, optional
+        Time level indices to write (negative indices count from the end); all by
+        default.
+    name : str
+        Base name of the series.
+
+    Returns
+    -------
+    Path
+        The ``.pvd`` file.
+    """
+    if not name or os.sep in name or (os.altsep and os.altsep in name):
+        raise ValueError(f"vtk: series name must be a plain file name, got {name!r}")
+    out = Path(outdir)
+    sub = out / name
+    sub.mkdir(parents=True, exist_ok=True)
+    mesh = result.problem.mesh
+    material = result.problem.material
+    L = len(result.t)
+    chosen = _levels(levels, L)
+    width = max(4, len(str(L - 1)))
+    base = to_meshio(mesh, with_boundary=False)
+    order = _block_order(mesh)
+    cell_id = [ids.astype(np.int64) for ids in order]
+    n = mesh.n_points
+    nodes = np.asarray(result.contact_nodes)
+    contact = np.zeros(n)
+    contact[nodes] = 1.0
+    entries: list[tuple[float, str]] = []
+    written: set[str] = set()
+    for lv in chosen:
+        u = np.asarray(result.u[lv])
+        disp = np.zeros((n, 3))
+        disp[:, :2] = u
+        point_data: dict[str, NDArray[np.float64]] = {"displacement": disp}
+        for key, arr in (
+            ("wear", result.wear),
+            ("u_nu", result.u_nu),
+            ("penetration", result.penetration),
+            ("lam", result.lam),
+            ("p", result.p),
+        ):
+            full = np.zeros(n)
+            full[nodes] = np.asarray(arr[lv])
+            point_data[key] = full
+        point_data["contact"] = contact
+        strain, stress, vm = cell_strain_stress(mesh, u, material)
+        cell_data = {
+            "strain": [strain[ids].reshape(-1, 9) for ids in order],
+            "stress": [stress[ids].reshape(-1, 9) for ids in order],
+            "von_mises": [vm[ids] for ids in order],
+            "cell_id": cell_id,
+        }
+        m = meshio.Mesh(base.points, base.cells, point_data=point_data, cell_data=cell_data)
+        fname = f"{name}_{lv:0{width}d}.vtu"
+        meshio.write(sub / fname, m, file_format="vtu")
+        written.add(fname)
+        entries.append((float(result.t[lv]), f"{name}/{fname}"))
+    pattern = re.compile(re.escape(name) + r"_\d+\.vtu")
+    for stale in sub.iterdir():
+        if stale.is_file() and pattern.fullmatch(stale.name) and stale.name not in written:
+            stale.unlink()
+    pvd = out / f"{name}.pvd"
+    fd, tmp = tempfile.mkstemp(dir=out, prefix=f".{name}.pvd.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(_pvd_text(entries))
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, pvd)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return pvd

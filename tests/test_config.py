@@ -1,0 +1,438 @@
+"""TOML configuration: every key form, every kind of error, and the paper's example files."""
+
+from __future__ import annotations
+
+import copy
+import re
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from vemwear.cli.config import ConfigError, load_config, parse_config
+from vemwear.contact import LinearCompliance, TableCompliance
+from vemwear.mesh import PARTS, part_code, write_mesh
+from vemwear.paper import ex52
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "examples"
+
+BASE = """
+title = "small"
+[mesh]
+generator = "squares"
+size = [2.0, 1.0]
+origin = [0.0, 0.0]
+divisions = [8, 4]
+[boundary]
+clamped = "left"
+traction = ["top", "right"]
+contact = "bottom"
+[material]
+lam = 4.0
+eta = 4.0
+[vem]
+stabilization = "paper"
+[loads]
+f1 = [0.0, -0.06]
+f2 = [0.0, 0.0]
+[contact]
+p = { type = "linear", c = 0.4 }
+g = 0.1
+mu = 0.2
+kappa = 2.0
+v_star = [1.0, 0.0]
+[time]
+T = 1.0
+steps = 8
+[solver]
+method = "newton"
+tol = 1e-10
+max_iter = 50
+backend = "scipy"
+[output]
+times = [0.25, 0.5, 1.0]
+figures = false
+vtk = false
+"""
+
+
+def base() -> dict[str, Any]:
+    return tomllib.loads(BASE)
+
+
+def parse(data: dict[str, Any], base_dir: Path | str = ".") -> Any:
+    return parse_config(data, source="config.toml", base_dir=base_dir)
+
+
+def tags(mesh) -> dict[str, int]:
+    return {p: int(np.sum(mesh.boundary_tags == part_code(p))) for p in PARTS}
+
+
+# ---------------------------------------------------------------------------- key forms
+def test_base_config() -> None:
+    cfg = parse(base())
+    pr = cfg.problem
+    assert cfg.title == "small"
+    assert pr.mesh.n_cells == 32 and pr.mesh.n_points == 45
+    assert tags(pr.mesh) == {"clamped": 4, "traction": 12, "contact": 8}
+    assert pr.contact.m == 8  # the corner (0, 0) is on Gamma_D
+    assert pr.material.lam == 4.0 and pr.material.eta == 4.0
+    assert pr.p == LinearCompliance(0.4)
+    np.testing.assert_allclose(pr.time.t, np.linspace(0, 1, 9))
+    assert cfg.solver.method == "newton" and cfg.solver.max_iter == 50
+    assert cfg.solver.backend == "scipy" and cfg.solver.tol == 1e-10
+    assert cfg.output.times == (0.25, 0.5, 1.0)
+    assert not cfg.output.figures and not cfg.output.vtk
+
+
+def test_defaults_of_optional_sections() -> None:
+    d = base()
+    for sec in ("vem", "loads", "solver", "output", "title"):
+        del d[sec]
+    cfg = parse(d)
+    assert cfg.problem.stabilization == "paper"
+    assert tuple(cfg.problem.f1) == (0.0, 0.0) and tuple(cfg.problem.f2) == (0.0, 0.0)
+    assert cfg.solver.method == "newton" and cfg.solver.max_iter is None
+    assert cfg.output.times == (0.25, 0.5, 0.75, 1.0)  # levels nearest T/4, ..., T
+    assert cfg.output.figures and cfg.output.vtk
+    assert cfg.title == "config"  # the file stem
+
+
+def test_boundary_segments_and_rest_give_the_same_tags() -> None:
+    ref = parse(base()).problem.mesh
+    d = base()
+    d["boundary"] = {
+        "clamped": {"from": [0.0, 0.0], "to": [0.0, 1.0]},
+        "contact": [{"from": [0.0, 0.0], "to": [1.0, 0.0]}, {"from": [1.0, 0.0], "to": [2.0, 0.0]}],
+        "traction": "rest",
+    }
+    np.testing.assert_array_equal(parse(d).problem.mesh.boundary_tags, ref.boundary_tags)
+    d["boundary"] = {"traction": "rest", "clamped": ["left"], "contact": "bottom"}
+    np.testing.assert_array_equal(parse(d).problem.mesh.boundary_tags, ref.boundary_tags)
+
+
+def test_boundary_mixed_list_and_order() -> None:
+    d = base()
+    # a part of the bottom is clamped: later parts win where selectors overlap
+    d["boundary"] = {
+        "contact": "bottom",
+        "traction": ["top", "right"],
+        "clamped": ["left", {"from": [0.0, 0.0], "to": [0.5, 0.0]}],
+    }
+    m = parse(d).problem.mesh
+    assert tags(m) == {"clamped": 6, "traction": 12, "contact": 6}
+
+
+def test_coefficient_tables_and_velocity_table() -> None:
+    d = base()
+    d["contact"]["g"] = {"along": "x", "at": [0.0, 2.0], "values": [0.1, 0.05]}
+    d["contact"]["mu"] = {"at": [0.0, 1.0], "values": [0.0, 0.3]}  # along defaults to x
+    d["contact"]["kappa"] = {"along": "s", "at": [0.0, 10.0], "values": [1.0, 1.0]}
+    d["contact"]["v_star"] = {"t": [0.0, 1.0], "values": [[1.0, 0.0], [3.0, 0.0]]}
+    pr = parse(d).problem
+    x = pr.contact.points[:, 0]
+    np.testing.assert_allclose(pr.nodal["g"], 0.1 - 0.025 * x)
+    np.testing.assert_allclose(pr.nodal["mu"], np.minimum(x, 1.0) * 0.3)
+    np.testing.assert_allclose(pr.nodal["kappa"], 1.0)
+    np.testing.assert_allclose(pr.v_star(0.5), [2.0, 0.0])
+    np.testing.assert_allclose(pr.v_star.n_star(0.5), [-1.0, 0.0])
+
+
+def test_table_compliance() -> None:
+    d = base()
+    d["contact"]["p"] = {"type": "table", "r": [0.0, 0.01, 0.1], "p": [0.0, 0.001, 0.1]}
+    pr = parse(d).problem
+    assert isinstance(pr.p, TableCompliance)
+    np.testing.assert_allclose(pr.p(np.array([-1.0, 0.005, 0.2])), [0.0, 0.0005, 0.21])
+
+
+def test_time_dt_list() -> None:
+    d = base()
+    d["time"] = {"dt": [0.25, 0.25, 0.5]}
+    cfg = parse(d)
+    np.testing.assert_allclose(cfg.problem.time.t, [0.0, 0.25, 0.5, 1.0])
+    d["time"] = {"T": 1.0, "dt": [0.25, 0.25, 0.5]}
+    assert parse(d).problem.time.T == 1.0
+
+
+def test_time_pattern() -> None:
+    d = base()
+    d["time"] = {"T": 1.0, "pattern": [1 / 128, 3 / 128]}
+    d["output"]["times"] = [0.25, 0.5, 1.0]
+    t = parse(d).problem.time.t
+    assert len(t) == 65 and t[-1] == 1.0
+    np.testing.assert_allclose(np.diff(t)[:4], [1 / 128, 3 / 128, 1 / 128, 3 / 128])
+
+
+def test_triangles_generator() -> None:
+    d = base()
+    d["mesh"] = {"generator": "triangles", "size": [2.0, 1.0], "divisions": [4, 2],
+                 "diagonal": "alternate"}
+    m = parse(d).problem.mesh
+    assert m.n_cells == 16 and set(m.groups) == {3}
+
+
+def test_mesh_file_with_and_without_boundary(tmp_path: Path) -> None:
+    ref = parse(base()).problem.mesh
+    write_mesh(ref, tmp_path / "mesh.vtu")
+    d = base()
+    d["mesh"] = {"file": "mesh.vtu"}
+    del d["boundary"]  # keep the file's tags
+    m1 = parse(d, base_dir=tmp_path).problem.mesh
+    np.testing.assert_allclose(m1.points, ref.points)
+    assert tags(m1) == tags(ref)
+    d["boundary"] = "file"
+    assert tags(parse(d, base_dir=tmp_path).problem.mesh) == tags(ref)
+    d["boundary"] = {"clamped": "left", "contact": "bottom", "traction": "rest"}
+    assert tags(parse(d, base_dir=tmp_path).problem.mesh) == tags(ref)
+
+
+def test_load_config_relative_mesh_file(tmp_path: Path) -> None:
+    sub = tmp_path / "case"
+    sub.mkdir()
+    write_mesh(parse(base()).problem.mesh, sub / "m.vtu")
+    text = BASE.replace('generator = "squares"\nsize = [2.0, 1.0]\norigin = [0.0, 0.0]\n'
+                        'divisions = [8, 4]', 'file = "m.vtu"')
+    (sub / "c.toml").write_text(text)
+    cfg = load_config(sub / "c.toml")
+    assert cfg.mesh_source == {"file": str((sub / "m.vtu").resolve())}
+    assert cfg.path == sub / "c.toml"
+
+
+def test_data_is_jsonable() -> None:
+    import json
+
+    cfg = parse(base())
+    json.dumps(cfg.data)
+    assert cfg.data["contact"]["mu"] == 0.2
+
+
+# ---------------------------------------------------------------------------- errors
+def _set(d: dict[str, Any], path: str, value: Any) -> None:
+    *head, last = path.split(".")
+    for k in head:
+        d = d[k]
+    if value is _DELETE:
+        del d[last]
+    else:
+        d[last] = value
+
+
+_DELETE = object()
+
+ERRORS = [
+    # (key path, new value, expected message; the file name is prepended)
+    ("contact.muu", 0.2, "[contact] unknown key 'muu'; did you mean 'mu'?"),
+    ("contac", {"mu": 0.2}, "unknown section or key 'contac'; did you mean [contact]?"),
+    ("titel", "x", "unknown section or key 'titel'; did you mean 'title'?"),
+    ("solver.metod", "uzawa", "[solver] unknown key 'metod'; did you mean 'method'?"),
+    ("mesh.divisons", [2, 2], "[mesh] unknown key 'divisons' for generator 'squares'; "
+                              "did you mean 'divisions'?"),
+    ("contact.mu", "0.2", "[contact] mu must be a number or a table { along, at, values }, "
+                          "got a string ('0.2')"),
+    ("contact.mu", -0.2, "[contact] mu must be >= 0, got -0.2"),
+    ("contact.kappa", -1, "[contact] kappa must be >= 0, got -1"),
+    ("contact.g", 0.0, "[contact] g must be > 0, got 0.0"),
+    ("contact.g", {"at": [0, 2], "values": [0.1, -0.1]}, "[contact] g.values[1] must be > 0"),
+    ("contact.g", {"at": [0, 2], "values": [0.1]}, "[contact] g: 'at' and 'values' must have"),
+    ("contact.g", {"along": "z", "at": [0], "values": [0.1]}, "[contact] g.along must be one of"),
+    ("contact.g", {"at": [2, 0], "values": [0.1, 0.1]}, "[contact] g.at must increase strictly"),
+    ("material.lam", 0, "[material] lam must be > 0, got 0"),
+    ("material.eta", True, "[material] eta must be a number, got a boolean (True)"),
+    ("material.lam", _DELETE, "[material] missing required key 'lam'"),
+    ("material", _DELETE, "missing required section [material]"),
+    ("contact", _DELETE, "missing required section [contact]"),
+    ("boundary", _DELETE, "missing required section [boundary]"),
+    ("contact.v_star", _DELETE, "[contact] missing required key 'v_star'"),
+    ("contact.v_star", [0.0, 0.0], "[contact] v_star must not be zero"),
+    ("contact.v_star", [1.0], "[contact] v_star must be an array of 2 numbers [x, y]"),
+    ("contact.v_star", {"t": [0, 1], "values": [[1, 0]]}, "[contact] v_star: 't' and 'values'"),
+    ("contact.p", {"type": "cubic"}, "[contact] p.type must be one of 'linear', 'table', "
+                                     "got 'cubic'"),
+    ("contact.p", {"type": "linear"}, "[contact] p missing required key 'c'"),
+    ("contact.p", {"type": "linear", "c": -1}, "[contact] p.c must be >= 0, got -1"),
+    ("contact.p", {"type": "table", "r": [0, 1], "p": [0, 1, 2]}, "[contact] p: r and p must"),
+    ("contact.p", {"type": "table", "r": [0, 1, 2], "p": [0, 2, 1]},
+     "[contact] p is not a valid compliance table: compliance table: p must be non-decreasing"),
+    ("contact.p", 0.4, "[contact] p must be a table, got a float (0.4)"),
+    ("time.T", -1.0, "[time] T must be > 0, got -1.0"),
+    ("time.T", _DELETE, "[time] missing required key 'T' (needed with 'steps')"),
+    ("time.steps", 8.0, "[time] steps must be an integer, got a float (8.0)"),
+    ("time.steps", 0, "[time] steps must be >= 1, got 0"),
+    ("time.dt", [0.5, 0.5], "[time] needs exactly one of 'steps' (uniform), 'dt'"),
+    ("time.steps", _DELETE, "[time] needs exactly one of"),
+    ("time.tmax", 1, "[time] unknown key 'tmax'"),
+    ("solver.tol", 0.0, "[solver] tol must be > 0, got 0.0"),
+    ("solver.tol", -1e-8, "[solver] tol must be > 0, got -1e-08"),
+    ("solver.method", "newtn", "[solver] method must be one of 'newton', 'newton-full', "
+                               "'uzawa', got 'newtn'; did you mean 'newton'?"),
+    ("solver.max_iter", 0, "[solver] max_iter must be >= 1, got 0"),
+    ("solver.backend", "mkl", "[solver] backend must be one of"),
+    ("vem.stabilization", "dofi", "[vem] stabilization must be one of 'paper', 'eta', 'trace'"),
+    ("loads.f1", [0, "a"], "[loads] f1[1] must be a number, got a string ('a')"),
+    ("output.times", [0.25, 0.3], "[output] times[1] = 0.3 is not a time level of the grid "
+                                  "(T = 1, 8 steps; nearest level 0.25)"),
+    ("output.times", 0.25, "[output] times must be an array, got a float (0.25)"),
+    ("output.vtk", "yes", "[output] vtk must be true or false, got a string ('yes')"),
+    ("mesh.generator", "voronio", "[mesh] generator = 'voronio' is not a known mesh family"),
+    ("mesh.generator", _DELETE, "[mesh] needs exactly one of 'generator' or 'file'"),
+    ("mesh.file", "m.vtu", "[mesh] needs exactly one of 'generator' or 'file', not both"),
+    ("mesh.divisions", [8, 0], "[mesh] divisions[1] must be >= 1, got 0"),
+    ("mesh.size", [2.0, -1.0], "[mesh] size[1] must be > 0, got -1"),
+    ("boundary.contact", "bottm", "[boundary] contact must be one of 'left', 'right', "
+                                  "'bottom', 'top', 'rest', got 'bottm'; did you mean 'bottom'?"),
+    ("boundary.contact", [{"from": [0, 0]}], "[boundary] contact[0] missing required key 'to'"),
+    ("boundary.contact", 3, "[boundary] contact must be a side name"),
+    ("boundary.contakt", "bottom", "[boundary] unknown key 'contakt'; did you mean 'contact'?"),
+    ("boundary.clamped", "rest", "[boundary] only one part can be 'rest'"),
+    ("boundary.traction", _DELETE, "invalid problem: 12 boundary edges have no boundary part"),
+    ("boundary", "file", "boundary = 'file' needs [mesh] file"),
+]
+
+
+@pytest.mark.parametrize(("path", "value", "expected"), ERRORS,
+                         ids=[f"{p}={v!r}"[:40] for p, v, _ in ERRORS])
+def test_error_messages(path: str, value: Any, expected: str) -> None:
+    d = base()
+    if path == "boundary.clamped":  # a second 'rest'
+        d["boundary"]["traction"] = "rest"
+    _set(d, path, value)
+    with pytest.raises(ConfigError) as info:
+        parse(d)
+    msg = str(info.value)
+    assert msg.startswith("config.toml: "), msg
+    assert expected in msg, msg
+    assert "\n" not in msg
+
+
+def test_negative_mu_message_exactly() -> None:
+    d = base()
+    d["contact"]["mu"] = -0.2
+    with pytest.raises(ConfigError, match=re.escape("config.toml: [contact] mu must be >= 0, "
+                                                    "got -0.2")):
+        parse(d)
+
+
+def test_missing_mesh_file(tmp_path: Path) -> None:
+    d = base()
+    d["mesh"] = {"file": "nowhere.vtu"}
+    with pytest.raises(ConfigError) as info:
+        parse(d, base_dir=tmp_path)
+    assert f"config.toml: [mesh] file not found: {tmp_path / 'nowhere.vtu'}" == str(info.value)
+
+
+def test_unreadable_mesh_file(tmp_path: Path) -> None:
+    (tmp_path / "bad.vtu").write_text("not a mesh")
+    d = base()
+    d["mesh"] = {"file": "bad.vtu"}
+    with pytest.raises(ConfigError, match=r"\[mesh\] file .*bad.vtu cannot be read"):
+        parse(d, base_dir=tmp_path)
+
+
+def test_file_errors(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match=r"missing\.toml: config file not found"):
+        load_config(tmp_path / "missing.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[mesh\ngenerator = 1\n")
+    with pytest.raises(ConfigError, match=r"bad.toml: not valid TOML: .*line 1"):
+        load_config(bad)
+    neg = tmp_path / "neg.toml"
+    neg.write_text(BASE.replace("mu = 0.2", "mu = -0.2"))
+    with pytest.raises(ConfigError) as info:
+        load_config(neg)
+    assert str(info.value) == f"{neg}: [contact] mu must be >= 0, got -0.2"
+
+
+def test_problem_errors_keep_the_file_name() -> None:
+    d = base()  # v* vanishes at t = 0.5: only the Problem sees it
+    d["contact"]["v_star"] = {"t": [0.0, 0.5, 1.0], "values": [[1.0, 0.0], [0.0, 0.0], [1.0, 0.0]]}
+    with pytest.raises(ConfigError, match=r"^config.toml: invalid problem: v_star vanishes at "
+                                          r"t = 0.5"):
+        parse(d)
+
+
+def test_dt_must_sum_to_T() -> None:
+    d = base()
+    d["time"] = {"T": 2.0, "dt": [0.5, 0.5]}
+    with pytest.raises(ConfigError, match=r"\[time\] dt sums to 1, but T = 2"):
+        parse(d)
+
+
+def test_input_dict_is_not_modified() -> None:
+    d = base()
+    before = copy.deepcopy(d)
+    parse(d)
+    assert d == before
+
+
+# ---------------------------------------------------------------------------- paper files
+@pytest.mark.parametrize("name", list(ex52.DATA_SETS))
+def test_example_files_match_paper_module(name: str) -> None:
+    cfg = load_config(EXAMPLES / f"example_5_2_{name}.toml")
+    a = cfg.problem
+    b = ex52.problems()[name]
+    np.testing.assert_array_equal(a.mesh.points, b.mesh.points)
+    np.testing.assert_array_equal(a.mesh.cell_offsets, b.mesh.cell_offsets)
+    np.testing.assert_array_equal(a.mesh.cell_vertices, b.mesh.cell_vertices)
+    np.testing.assert_array_equal(a.mesh.boundary_tags, b.mesh.boundary_tags)
+    np.testing.assert_array_equal(a.contact.nodes, b.contact.nodes)
+    for key in ("g", "mu", "kappa"):
+        np.testing.assert_array_equal(a.nodal[key], b.nodal[key])
+    np.testing.assert_array_equal(a.time.t, b.time.t)
+    assert a.p.describe() == b.p.describe()
+    assert (a.material.lam, a.material.eta) == (b.material.lam, b.material.eta)
+    np.testing.assert_array_equal(np.asarray(a.f1, float), np.asarray(b.f1, float))
+    np.testing.assert_array_equal(np.asarray(a.f2, float), np.asarray(b.f2, float))
+    for t in (0.0, 0.5, 1.0):
+        np.testing.assert_array_equal(a.v_star(t), b.v_star(t))
+    assert a.stabilization == b.stabilization
+    assert cfg.output.times == ex52.TIMES
+    # and the paper's numbers themselves
+    assert b.mesh.n_cells == 32 * 16 and len(b.time.t) == 65
+    assert b.contact.m == 32
+    assert dict(zip(("mu", "kappa"), (float(b.nodal["mu"][0]), float(b.nodal["kappa"][0])),
+                    strict=True)) == ex52.DATA_SETS[name]
+
+
+# ---------------------------------------------------------------------------- mesh families
+def test_other_mesh_families_are_looked_up(monkeypatch: pytest.MonkeyPatch) -> None:
+    import vemwear.mesh as vm
+
+    families = pytest.importorskip("vemwear.mesh.families")
+    names = ["hexagons", "rectangle_voronoi"]
+    for n in names:
+        monkeypatch.setattr(vm, n, getattr(families, n), raising=False)
+    monkeypatch.setattr(vm, "__all__", sorted({*vm.__all__, *names}))
+    d = base()
+    d["mesh"] = {"generator": "voronoi", "size": [2.0, 1.0], "n_cells": 24, "seed": 1}
+    m = parse(d).problem.mesh
+    assert m.n_cells == 24 and max(m.groups) > 4
+    d["mesh"] = {"generator": "hexagons", "size": [2.0, 1.0], "divisions": 6}
+    assert max(parse(d).problem.mesh.groups) == 6
+    d["mesh"] = {"generator": "hexagons", "divisons": 6}
+    with pytest.raises(ConfigError, match="unknown key 'divisons' for generator 'hexagons'; "
+                                          "did you mean 'divisions'"):
+        parse(d)
+    d["mesh"] = {"generator": "hexagon"}
+    with pytest.raises(ConfigError, match=r"did you mean 'hexagons'\? available: .*voronoi"):
+        parse(d)
+
+
+def test_domain_families_accept_size_and_origin(monkeypatch: pytest.MonkeyPatch) -> None:
+    import vemwear.mesh as vm
+
+    voronoi = pytest.importorskip("vemwear.mesh.voronoi")
+    monkeypatch.setattr(vm, "voronoi_mesh", voronoi.voronoi_mesh, raising=False)
+    monkeypatch.setattr(vm, "__all__", sorted({*vm.__all__, "voronoi_mesh"}))
+    d = base()
+    d["mesh"] = {"generator": "voronoi_mesh", "size": [2.0, 1.0], "origin": [0.0, 0.0],
+                 "n_cells": 16}
+    cfg = parse(d)
+    assert cfg.problem.mesh.n_cells == 16
+    assert cfg.mesh_source["domain"] == ((0.0, 0.0), (2.0, 0.0), (2.0, 1.0), (0.0, 1.0))
+    d["mesh"]["domain"] = [[0, 0], [2, 0], [2, 1], [0, 1]]
+    with pytest.raises(ConfigError, match="either 'domain' or 'size'/'origin'"):
+        parse(d)

@@ -1,0 +1,176 @@
+"""Step solvers and the time loop: agreement, KKT residuals, the inequality (3.21), wear."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vemwear.contact import LinearCompliance, TableCompliance
+from vemwear.contact.phi import phi_h
+from vemwear.mesh import rectangle_squares, tag_rectangle
+from vemwear.simulate import Problem, SolverOptions, TimeGrid, simulate
+from vemwear.solvers import ConvergenceError
+from vemwear.vem import Material
+
+
+def paper_problem(divisions=(16, 8), steps=16, mu=0.2, kappa=2.0, time=None, **kw) -> Problem:
+    """Section 5 data on a coarser mesh."""
+    mesh = tag_rectangle(rectangle_squares((2.0, 1.0), divisions))
+    return Problem(
+        mesh, Material(4.0, 4.0), time or TimeGrid.uniform(1.0, steps), f1=(0.0, -0.06),
+        p=kw.pop("p", LinearCompliance(0.4)), g=kw.pop("g", 0.1), mu=mu, kappa=kappa,
+        v_star=kw.pop("v_star", (1.0, 0.0)), **kw,
+    )
+
+
+def rel(a, b):
+    return float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300))
+
+
+@pytest.fixture(scope="module")
+def small():
+    pr = paper_problem()
+    return pr, simulate(pr, "newton")
+
+
+def test_problem_exercises_both_contact_regimes(small):
+    """The data must activate the rigid layer somewhere and leave it inactive elsewhere."""
+    _, r = small
+    g = 0.1
+    assert np.any(np.isclose(r.u_nu, g, rtol=0, atol=1e-12)), "rigid layer never reached"
+    assert np.any(r.lam > 1e-6) and np.any(r.p > 1e-6)
+    assert np.any((r.u_nu > 0) & (r.u_nu < g - 1e-6)), "no node in the soft layer only"
+    assert r.wear[-1].max() > 0.01
+
+
+def test_condensed_newton_equals_full_newton(small):
+    pr, r = small
+    rf = simulate(pr, "newton-full")
+    assert rel(rf.u, r.u) < 1e-10
+    assert rel(rf.wear, r.wear) < 1e-10
+    assert rel(rf.lam, r.lam) < 1e-10
+    assert rel(rf.p, r.p) < 1e-10
+
+
+@pytest.mark.parametrize("mu,kappa", [(0.2, 2.0), (0.6, 10.0)])
+def test_uzawa_agrees_with_newton(mu, kappa):
+    pr = paper_problem(divisions=(8, 4), steps=8, mu=mu, kappa=kappa)
+    rn = simulate(pr, SolverOptions("newton", tol=1e-12))
+    ru = simulate(pr, SolverOptions("uzawa", tol=1e-12))
+    assert rel(ru.u, rn.u) < 1e-8
+    assert rel(ru.wear, rn.wear) < 1e-8
+    assert rel(ru.lam, rn.lam) < 1e-8
+    assert ru.iterations.min() > rn.iterations.max()  # Uzawa is the slow reference
+
+
+@pytest.mark.slow
+def test_example_5_2_newton_and_uzawa_agree():
+    """Example 5.2 at full size (h = 1/16, k = 1/64): u, w and lam to 1e-8, max norm."""
+    for mu, kappa in [(0.2, 2.0), (0.2, 10.0), (0.6, 10.0)]:
+        pr = paper_problem(divisions=(32, 16), steps=64, mu=mu, kappa=kappa)
+        rn = simulate(pr, SolverOptions("newton"))
+        ru = simulate(pr, SolverOptions("uzawa", tol=1e-11))
+        for a, b in [(ru.u, rn.u), (ru.wear, rn.wear), (ru.lam, rn.lam)]:
+            assert rel(a, b) < 1e-8, (mu, kappa)
+
+
+@pytest.mark.parametrize("method", ["newton", "newton-full", "uzawa"])
+def test_every_step_meets_the_kkt_tolerance(method):
+    pr = paper_problem(divisions=(8, 4), steps=8)
+    r = simulate(pr, SolverOptions(method, tol=1e-10))
+    assert r.residuals.shape == (9, 3)
+    assert np.all(r.residuals <= 1e-10)
+    # and independently of the solver's own bookkeeping:
+    d = pr.discrete
+    for n in range(len(r.t)):
+        u = r.u[n].ravel()[d.free]
+        lam = r.lam[n]
+        y = d.system.N @ u
+        assert np.all(y <= d.g * (1 + 1e-10))
+        assert np.all(lam >= 0)
+        assert np.all(np.abs(lam * (y - d.g)) <= 1e-10 * max(lam.max(), 1e-300) * d.g.max())
+
+
+def test_solution_satisfies_the_variational_inequality(small):
+    """(3.21): a_h(u, v - u) + phi(u, v) - phi(u, u) >= f_h(v - u) for v in U_h."""
+    pr, r = small
+    d = pr.discrete
+    K, F = d.K_full, d.load(0.0)
+    rng = np.random.default_rng(1)
+    n = len(r.t) - 1
+    u = r.u[n].ravel()
+    w = r.wear[n]
+    n_star = pr.v_star.n_star(r.t[n])
+    fh = np.zeros(d.n_dof)
+    fh[d.free] = F
+    cb = d.contact
+    for _ in range(20):
+        v = u.copy()
+        v[d.free] += 0.01 * rng.normal(size=len(d.free))
+        y = cb.N @ v
+        v_nodes = v.reshape(-1, 2)
+        over = np.maximum(y - d.g, 0.0)  # project onto U_h: v_nu <= g
+        v_nodes[cb.nodes] -= over[:, None] * cb.normals
+        v = v_nodes.ravel()
+        assert np.all(cb.N @ v <= d.g + 1e-14)
+        lhs = (K @ u) @ (v - u) + phi_h(cb, pr.p, d.mu, n_star, w, u, v) - phi_h(
+            cb, pr.p, d.mu, n_star, w, u, u
+        )
+        assert lhs - fh @ (v - u) >= -1e-12 * np.abs(fh).sum()
+
+
+def test_wear_is_left_rectangle_rule_on_nonuniform_grid():
+    """w^{n+1} = w^n + k_n kappa |v*| p(u_nu^n - w^n) with k_n alternating 1/128, 3/128."""
+    tg = TimeGrid.pattern(1.0, [1 / 128, 3 / 128])
+    assert len(tg.t) == 65 and np.isclose(tg.t[-1], 1.0)
+    pr = paper_problem(divisions=(16, 8), time=tg, kappa=2.0, v_star=(2.0, 0.0))
+    r = simulate(pr)
+    p = 0.4 * np.maximum(r.u_nu - r.wear, 0.0)
+    assert np.allclose(r.p, p, rtol=0, atol=1e-14)
+    k = np.diff(r.t)
+    expected = np.cumsum(np.vstack([np.zeros(r.wear.shape[1]), k[:, None] * 2.0 * 2.0 * p[:-1]]), axis=0)
+    assert np.allclose(r.wear, expected, rtol=1e-13, atol=1e-15)
+
+
+def test_wear_nonnegative_and_nondecreasing(small):
+    _, r = small
+    assert np.all(r.wear >= 0)
+    assert np.all(np.diff(r.wear, axis=0) >= -1e-15)
+    assert np.all(r.wear[0] == 0)
+
+
+def test_paper_findings_example_5_2():
+    """Fig 3-5: more wear with larger kappa, less wear with larger mu (Example 5.2)."""
+    wmax = {}
+    for mu, kappa in [(0.2, 2.0), (0.2, 10.0), (0.6, 10.0)]:
+        r = simulate(paper_problem(divisions=(32, 16), steps=64, mu=mu, kappa=kappa))
+        wmax[mu, kappa] = r.wear[-1]
+    assert np.all(wmax[0.2, 10.0] >= wmax[0.2, 2.0]) and wmax[0.2, 10.0].max() > 1.5 * wmax[0.2, 2.0].max()
+    assert wmax[0.6, 10.0].sum() < wmax[0.2, 10.0].sum()
+
+
+def test_time_dependent_velocity_and_table_law():
+    """v*(t) reversing direction and a piecewise-linear law run and keep the KKT tolerance."""
+    vs = {"t": [0.0, 0.5, 1.0], "values": [[1.0, 0.0], [1.0, 0.0], [-2.0, 0.0]]}
+    law = TableCompliance((0.0, 0.05, 0.5), (0.0, 0.01, 0.5))
+    pr = paper_problem(divisions=(8, 4), steps=10, p=law, v_star=vs,
+                       g={"along": "x", "at": [0.0, 2.0], "values": [0.12, 0.08]})
+    r = simulate(pr)
+    assert np.all(r.residuals <= 1e-10)
+    assert np.all(np.diff(r.wear, axis=0) >= -1e-15)
+
+
+def test_nonconvergence_raises_with_level():
+    pr = paper_problem(divisions=(8, 4), steps=4)
+    with pytest.raises(ConvergenceError, match=r"time level \d+ \(t = "):
+        simulate(pr, SolverOptions("uzawa", max_iter=3))
+
+
+def test_time_grids():
+    assert np.allclose(TimeGrid.uniform(1.0, 4).t, [0, 0.25, 0.5, 0.75, 1.0])
+    assert np.allclose(TimeGrid.from_steps([0.1, 0.2]).t, [0, 0.1, 0.3])
+    tg = TimeGrid.pattern(1.0, [0.3])
+    assert np.allclose(tg.t, [0, 0.3, 0.6, 0.9, 1.0])
+    for bad in ([0.0, 0.0, 1.0], [0.1, 0.5], [0.0, 0.5, 0.4]):
+        with pytest.raises(ValueError, match="time grid"):
+            TimeGrid(np.array(bad))
