@@ -423,7 +423,7 @@ def plot_displacement(
     """
     mesh = _mesh_of(result)
     lv = int(level) % len(result.t)
-    u = np.asarray(result.u[lv])
+    u = np.asarray(result.displacement(lv))
     if component is None:
         comps: list[int | str] = [0, 1]
     elif component in (0, 1, "magnitude"):
@@ -546,7 +546,7 @@ def plot_deformed(
     """
     mesh = _mesh_of(result)
     lv = int(level) % len(result.t)
-    u = np.asarray(result.u[lv])
+    u = np.asarray(result.displacement(lv))
     P = mesh.points
     size = float(np.ptp(P, axis=0).max()) or 1.0
     umax = float(np.linalg.norm(u, axis=1).max(initial=0.0))

@@ -123,6 +123,7 @@ def result_arrays(result: Result) -> dict[str, NDArray[Any]]:
         "cells_vertices": np.asarray(mesh.cell_vertices, dtype=np.int64),
         "boundary_tags": np.asarray(mesh.boundary_tags, dtype=np.int8),
         "u": np.asarray(result.u, dtype=np.float64),
+        "u_levels": np.asarray(result.u_levels, dtype=np.int64),
         "contact_nodes": np.asarray(result.contact_nodes, dtype=np.int64),
         "contact_s": np.asarray(result.contact_s, dtype=np.float64),
         "contact_points": np.asarray(result.contact_points, dtype=np.float64),

@@ -150,7 +150,8 @@ def write_vtk_series(
     mesh = result.problem.mesh
     material = result.problem.material
     L = len(result.t)
-    chosen = _levels(levels, L)
+    # by default every level whose displacement was stored
+    chosen = [int(v) for v in result.u_levels] if levels is None else _levels(levels, L)
     width = max(4, len(str(L - 1)))
     base = to_meshio(mesh, with_boundary=False)
     order = _block_order(mesh)
@@ -162,7 +163,7 @@ def write_vtk_series(
     entries: list[tuple[float, str]] = []
     written: set[str] = set()
     for lv in chosen:
-        u = np.asarray(result.u[lv])
+        u = np.asarray(result.displacement(lv))
         disp = np.zeros((n, 3))
         disp[:, :2] = u
         point_data: dict[str, NDArray[np.float64]] = {"displacement": disp}

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from tqdm.auto import tqdm
 
 from ..solvers import SOLVERS, NewtonOptions, StepSolution, UzawaOptions
@@ -65,7 +65,8 @@ class Result:
     ----------
     t : (L,) time levels
     points : (n_points, 2) vertex coordinates
-    u : (L, n_points, 2) displacement
+    u : (S, n_points, 2) displacement at the stored levels ``u_levels`` (all by default)
+    u_levels : (S,) indices of the levels whose displacement is stored
     contact_nodes : (m,) vertex ids on Gamma_C, ordered along it
     contact_s : (m,) arc length along Gamma_C; contact_points : (m, 2)
     wear, u_nu, penetration, lam, p : (L, m) at contact nodes; penetration = u_nu - wear,
@@ -87,6 +88,7 @@ class Result:
     p: NDArray[np.float64]
     iterations: NDArray[np.int64]
     residuals: NDArray[np.float64]
+    u_levels: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
     solver: dict[str, Any] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
 
@@ -100,12 +102,24 @@ class Result:
         """Index of the level at time t."""
         return int(self.problem.time.index([t])[0])
 
+    def displacement(self, level: int) -> NDArray[np.float64]:
+        """(n_points, 2) displacement at a level (negative counts from the end)."""
+        lv = int(level) % len(self.t)
+        where = np.flatnonzero(self.u_levels == lv)
+        if where.size == 0:
+            raise KeyError(
+                f"the displacement at level {lv} (t = {self.t[lv]:g}) was not stored; "
+                f"stored levels: {self.u_levels.tolist()[:10]}"
+            )
+        return self.u[where[0]]
+
 
 def simulate(
     problem: Problem,
     solver: SolverOptions | str = "newton",
     *,
     progress: bool = False,
+    store: str | ArrayLike = "all",
     callback: Callable[[int, StepSolution], None] | None = None,
 ) -> Result:
     """Run the fully discrete scheme (Problem 3.3) on the problem's time grid.
@@ -113,6 +127,10 @@ def simulate(
     At each level ``n``: solve the step problem (3.21) with ``w^n`` fixed, warm-started
     from level ``n - 1``; then ``w^{n+1} = w^n + k_n alpha(t_n) p(u_nu^n - w^n)``
     (left rectangle rule, 3.22), with ``w^0 = 0`` (3.23).
+
+    The contact quantities are kept at every level. The full displacement costs a
+    back-substitution per level with the condensed solver, so ``store`` chooses
+    where it is recovered: ``"all"``, ``"final"``, or a list of times (levels).
 
     Raises
     ------
@@ -132,7 +150,15 @@ def simulate(
     tgrid = problem.time.t
     L, m = len(tgrid), sysm.m
     nv = problem.mesh.n_points
-    U = np.zeros((L, nv, 2))
+    if isinstance(store, str):
+        if store not in ("all", "final"):
+            raise ValueError(f"store must be 'all', 'final' or a list of times, got {store!r}")
+        u_levels = np.arange(L) if store == "all" else np.array([L - 1])
+    else:
+        u_levels = np.unique(problem.time.index(store))
+    slot = -np.ones(L, dtype=np.int64)
+    slot[u_levels] = np.arange(len(u_levels))
+    U = np.zeros((len(u_levels), nv, 2))
     W, Y, LAM, P = (np.zeros((L, m)) for _ in range(4))
     iters = np.zeros(L, dtype=np.int64)
     res = np.zeros((L, 3))
@@ -142,8 +168,9 @@ def simulate(
     bar = tqdm(range(L), desc="time levels", unit="lvl", disable=not progress, leave=False)
     for n in bar:
         step = d.step_data(n, w)
-        sol = step_solver.solve(step, guess)
-        U[n] = d.full_displacement(sol.u)
+        sol = step_solver.solve(step, guess, recover=bool(slot[n] >= 0))
+        if slot[n] >= 0:
+            U[slot[n]] = d.full_displacement(sol.u)
         W[n], Y[n], LAM[n], P[n] = w, sol.u_nu, sol.lam, sol.p
         iters[n] = sol.iterations
         res[n] = [sol.residuals[k] for k in Result.RESIDUAL_NAMES]
@@ -159,7 +186,7 @@ def simulate(
         problem=problem, t=np.array(tgrid), points=problem.mesh.points.copy(), u=U,
         contact_nodes=d.contact.nodes.copy(), contact_s=d.contact.s.copy(),
         contact_points=d.contact.points.copy(), wear=W, u_nu=Y, lam=LAM, p=P,
-        iterations=iters, residuals=res,
+        iterations=iters, residuals=res, u_levels=u_levels,
         solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
         timings=timings,
     )
