@@ -2,21 +2,55 @@
 
 from .boundary import segment_predicate, side_predicate, tag_rectangle
 from .checks import check_mesh
+from .families import (
+    distorted_quads,
+    hexagons,
+    nonconvex_mesh,
+    perturb_vertices,
+    rectangle_voronoi,
+    squares_with_hanging_nodes,
+)
 from .generate import rectangle_squares, rectangle_triangles
 from .io import read_mesh, write_mesh
 from .polymesh import PARTS, Mesh, MeshError, part_code
+from .quality import QualityReport, kernel_disks, quality_report
+from .refine import refine_along, refine_cells, refine_where
+from .voronoi import (
+    l_shape_domain,
+    point_in_domain,
+    rectangle_domain,
+    voronoi_from_seeds,
+    voronoi_mesh,
+)
 
 __all__ = [
     "PARTS",
     "Mesh",
     "MeshError",
+    "QualityReport",
     "check_mesh",
+    "distorted_quads",
+    "hexagons",
+    "kernel_disks",
+    "l_shape_domain",
+    "nonconvex_mesh",
     "part_code",
+    "perturb_vertices",
+    "point_in_domain",
+    "quality_report",
     "read_mesh",
+    "rectangle_domain",
     "rectangle_squares",
     "rectangle_triangles",
+    "rectangle_voronoi",
+    "refine_along",
+    "refine_cells",
+    "refine_where",
     "segment_predicate",
     "side_predicate",
+    "squares_with_hanging_nodes",
     "tag_rectangle",
+    "voronoi_from_seeds",
+    "voronoi_mesh",
     "write_mesh",
 ]

@@ -1,0 +1,292 @@
+"""Local refinement of polygonal meshes with hanging nodes.
+
+A refined cell with ``k`` geometric corners (vertices where its boundary turns;
+hanging nodes on straight sides are not corners) is split into ``k``
+quadrilaterals around a centre point, through the midpoints of its ``k``
+geometric sides: child ``j`` is ``(m_{j-1}, ..., corner_j, ..., m_j, centre)``
+with every vertex the parent had between ``m_{j-1}`` and ``m_j`` (a child may so
+carry hanging nodes). For a square this is the usual split into four squares;
+a side whose midpoint is already a vertex (a hanging node left by an earlier
+refinement of the neighbour) reuses it.
+
+Every new midpoint is also inserted, as a plain vertex, into the vertex list of
+the neighbouring cell that shares the edge, so the result is conforming in the
+virtual element sense (paper, Remark 4.9) and passes
+:func:`~vemwear.mesh.checks.check_mesh`. A boundary edge that is split keeps the
+part code of its parent edge in both halves.
+
+The centre is the centroid when it lies strictly inside the kernel of the cell
+(always true for convex cells), otherwise the centre of the largest disk in the
+kernel (see :func:`~vemwear.mesh.quality.kernel_disks`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .polymesh import Mesh, MeshError, part_code
+from .quality import _kernel_disk_group
+
+__all__ = ["refine_along", "refine_cells", "refine_where"]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+def _corners(X: FloatArray) -> NDArray[np.bool_]:
+    """Geometric corners of a polygon (vertices where the boundary is not straight)."""
+    e_in = X - np.roll(X, 1, axis=0)
+    e_out = np.roll(X, -1, axis=0) - X
+    cr = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
+    dot = np.sum(e_in * e_out, axis=1)
+    scale = np.hypot(e_in[:, 0], e_in[:, 1]) * np.hypot(e_out[:, 0], e_out[:, 1])
+    straight = (np.abs(cr) <= 1e-10 * scale) & (dot > 0)
+    return ~straight
+
+
+def _centre(X: FloatArray) -> FloatArray:
+    """Centroid if strictly inside the kernel, else centre of the largest kernel disk."""
+    B = np.roll(X, -1, axis=0)
+    cr = X[:, 0] * B[:, 1] - B[:, 0] * X[:, 1]
+    area = 0.5 * cr.sum()
+    c = np.array([np.sum((X[:, 0] + B[:, 0]) * cr), np.sum((X[:, 1] + B[:, 1]) * cr)]) / (6 * area)
+    e = B - X
+    L = np.hypot(e[:, 0], e[:, 1])
+    side = (e[:, 0] * (c[1] - X[:, 1]) - e[:, 1] * (c[0] - X[:, 0])) / L
+    diam = float(np.max(np.linalg.norm(X[:, None] - X[None], axis=-1)))
+    if np.all(side > 1e-8 * diam):
+        return c
+    rho, cen = _kernel_disk_group(X[None])
+    if not rho[0] > 1e-12 * diam:
+        raise MeshError("cannot refine a cell that is not star-shaped with respect to a disk")
+    return cen[0]
+
+
+def refine_cells(
+    mesh: Mesh, cell_ids: ArrayLike, *, return_parent: bool = False
+) -> Mesh | tuple[Mesh, IntArray]:
+    """Split the given cells into quadrilaterals around their centres (one level).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        A valid mesh (see :func:`~vemwear.mesh.checks.check_mesh`), possibly with
+        hanging nodes and tagged boundary parts.
+    cell_ids : array_like of int
+        Cells to refine (repetitions are ignored).
+    return_parent : bool
+        Also return, for every new cell, the id of the cell of ``mesh`` it comes from.
+
+    Returns
+    -------
+    Mesh or (Mesh, (n_new_cells,) int array)
+        The refined mesh. Each refined cell is replaced in place by its children
+        (so cell ids after it shift); the old vertices keep their ids, new vertices
+        (side midpoints, then centres) are appended. Boundary tags carry over.
+    """
+    sel = np.unique(np.asarray(cell_ids, dtype=np.int64).ravel())
+    if sel.size and (sel[0] < 0 or sel[-1] >= mesh.n_cells):
+        raise ValueError(f"cell ids must lie in 0..{mesh.n_cells - 1}")
+    if sel.size == 0:
+        parent = np.arange(mesh.n_cells)
+        return (mesh, parent) if return_parent else mesh
+    P = mesh.points
+    nP = mesh.n_points
+    new_pts: list[FloatArray] = []
+    # new vertices on mesh edges: undirected edge -> list of (parameter, vertex id)
+    on_edge: dict[tuple[int, int], list[tuple[float, int]]] = {}
+    # cell -> (corner ids, midpoint ids, centre id)
+    plan: dict[int, tuple[list[int], list[int], int]] = {}
+
+    def new_point(xy: FloatArray) -> int:
+        new_pts.append(np.asarray(xy, dtype=float))
+        return nP + len(new_pts) - 1
+
+    for c in sel.tolist():
+        V = mesh.cell(c)
+        X = P[V]
+        n = len(V)
+        cpos = np.flatnonzero(_corners(X))
+        if len(cpos) < 3:
+            raise MeshError(f"cell {c} has fewer than three corners")
+        mids: list[int] = []
+        for k in range(len(cpos)):
+            a, b = cpos[k], cpos[(k + 1) % len(cpos)]
+            chain = [(a + j) % n for j in range(((b - a) % n) + 1)]  # positions a..b
+            Y = X[chain]
+            seg = np.linalg.norm(np.diff(Y, axis=0), axis=1)
+            s = np.concatenate([[0.0], np.cumsum(seg)])
+            half = 0.5 * s[-1]
+            tol = 1e-9 * s[-1]
+            hit = np.flatnonzero(np.abs(s - half) <= tol)
+            if hit.size:
+                mids.append(int(V[chain[hit[0]]]))
+                continue
+            j = int(np.searchsorted(s, half) - 1)
+            u, v = int(V[chain[j]]), int(V[chain[j + 1]])
+            xy = 0.5 * (X[a] + X[b])
+            key = (min(u, v), max(u, v))
+            pu, pv = P[key[0]], P[key[1]]
+            t = float(np.dot(xy - pu, pv - pu) / np.dot(pv - pu, pv - pu))
+            lst = on_edge.setdefault(key, [])
+            found = next((pid for (tt, pid) in lst if abs(tt - t) <= 1e-9), None)
+            if found is None:
+                found = new_point(xy)
+                lst.append((t, found))
+            mids.append(found)
+        plan[c] = ([int(V[p]) for p in cpos], mids, -1)
+    for c in sel.tolist():
+        corners, mids, _ = plan[c]
+        plan[c] = (corners, mids, new_point(_centre(P[mesh.cell(c)])))
+
+    points = np.vstack([P, *[p[None] for p in new_pts]]) if new_pts else P.copy()
+
+    # insert the new edge points into every cell that has the edge (refined or not)
+    touched = set()
+    if on_edge:
+        de = mesh.directed_edges
+        keys = np.sort(de, axis=1)
+        nk = max(nP, 1)
+        code = keys[:, 0] * nk + keys[:, 1]
+        wanted = np.array([a * nk + b for (a, b) in on_edge], dtype=np.int64)
+        rows = np.flatnonzero(np.isin(code, wanted))
+        touched = set(mesh.edge_cells[rows].tolist())
+
+    def augmented(c: int) -> list[int]:
+        V = mesh.cell(c).tolist()
+        if c not in touched:
+            return V
+        out: list[int] = []
+        n = len(V)
+        for i in range(n):
+            a, b = V[i], V[(i + 1) % n]
+            out.append(a)
+            lst = on_edge.get((min(a, b), max(a, b)))
+            if lst:
+                ts = sorted(lst) if a < b else sorted(lst, reverse=True)
+                out.extend(pid for _t, pid in ts)
+        return out
+
+    cells: list[list[int]] = []
+    parent: list[int] = []
+    selset = set(sel.tolist())
+    for c in range(mesh.n_cells):
+        W = augmented(c)
+        if c not in selset:
+            cells.append(W)
+            parent.append(c)
+            continue
+        corners, mids, centre = plan[c]
+        pos = {v: i for i, v in enumerate(W)}
+        nW = len(W)
+        k = len(corners)
+        for j in range(k):
+            start = pos[mids[j - 1]]
+            stop = pos[mids[j]]
+            length = (stop - start) % nW
+            child = [W[(start + i) % nW] for i in range(length + 1)]
+            child.append(centre)
+            cells.append(child)
+            parent.append(c)
+    new_mesh = Mesh.from_cells(points, cells)
+    new_mesh = _carry_tags(mesh, new_mesh, on_edge)
+    return (new_mesh, np.asarray(parent, dtype=np.int64)) if return_parent else new_mesh
+
+
+def _carry_tags(
+    old: Mesh, new: Mesh, on_edge: dict[tuple[int, int], list[tuple[float, int]]]
+) -> Mesh:
+    """Boundary tags of ``new`` from ``old``: a half of a split edge keeps its parent's code."""
+    if not np.any(old.boundary_tags):
+        return new
+    nk = max(old.n_points, 1)
+    ob = np.sort(old.boundary_edges, axis=1)
+    okey = ob[:, 0] * nk + ob[:, 1]
+    order = np.argsort(okey)
+    okey, otag = okey[order], old.boundary_tags[order]
+    parent_edge = np.arange(new.n_points, dtype=np.int64)  # new vertex -> an old edge key
+    is_new = np.zeros(new.n_points, dtype=bool)
+    for (a, b), lst in on_edge.items():
+        for _t, pid in lst:
+            parent_edge[pid] = a * nk + b
+            is_new[pid] = True
+    be = new.boundary_edges
+    p, q = be[:, 0], be[:, 1]
+    key = np.minimum(p, q) * nk + np.maximum(p, q)
+    key = np.where(is_new[p], parent_edge[p], key)
+    key = np.where(is_new[q], parent_edge[q], key)
+    i = np.clip(np.searchsorted(okey, key), 0, len(okey) - 1)
+    found = okey[i] == key
+    tags = np.where(found, otag[i], 0).astype(np.int8)
+    return Mesh(new.points, new.cell_offsets, new.cell_vertices, tags)
+
+
+def refine_along(
+    mesh: Mesh, part: str = "contact", levels: int = 1, *, touching: str = "edge"
+) -> Mesh:
+    """Refine the cells along a boundary part, ``levels`` times.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Mesh with tagged boundary parts.
+    part : str
+        ``"clamped"``, ``"traction"`` or ``"contact"``.
+    levels : int
+        Number of successive refinements; each level refines the cells along the
+        part in the current mesh, so the cell size there is divided by
+        ``2 ** levels`` (for quadrilaterals).
+    touching : {"edge", "vertex"}
+        Refine the cells that own an edge of the part, or also those that only
+        share a vertex with it.
+
+    Returns
+    -------
+    Mesh
+    """
+    code = part_code(part)
+    if touching not in ("edge", "vertex"):
+        raise ValueError(f"touching must be 'edge' or 'vertex', got {touching!r}")
+    if not np.any(mesh.boundary_tags == code):
+        raise MeshError(f"the mesh has no {part!r} boundary edges to refine along")
+    for _ in range(int(levels)):
+        if touching == "edge":
+            cells = mesh.boundary_edge_cells[mesh.boundary_tags == code]
+        else:
+            vs = mesh.part_vertices(part)
+            cells = mesh.edge_cells[np.isin(mesh.directed_edges[:, 0], vs)]
+        mesh = refine_cells(mesh, np.unique(cells))
+    return mesh
+
+
+def refine_where(
+    mesh: Mesh,
+    predicate: Callable[[FloatArray], NDArray[np.bool_]],
+    levels: int = 1,
+) -> Mesh:
+    """Refine the cells whose vertex average satisfies ``predicate``, ``levels`` times.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    predicate : callable
+        Maps an (m, 2) array of cell vertex averages to an (m,) boolean array.
+    levels : int
+        Repeat on the new mesh (the children where the predicate still holds).
+
+    Returns
+    -------
+    Mesh
+    """
+    if not callable(predicate):
+        raise TypeError("predicate must be callable; use refine_cells for explicit ids")
+    for _ in range(int(levels)):
+        cen = np.zeros((mesh.n_cells, 2))
+        np.add.at(cen, mesh.edge_cells, mesh.points[mesh.cell_vertices])
+        cen /= mesh.cell_sizes[:, None]
+        hit = np.flatnonzero(np.asarray(predicate(cen), dtype=bool))
+        mesh = refine_cells(mesh, hit)
+    return mesh
