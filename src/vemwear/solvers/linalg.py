@@ -93,8 +93,12 @@ class SchurFactor:
     name = "scipy"
 
     def __init__(self, K: sp.spmatrix, last: NDArray[np.int64], points: NDArray[np.float64]) -> None:
+        import time
+
         from .ordering import nested_dissection
 
+        tick = time.perf_counter()
+        self.timings: dict[str, float] = {}
         n = K.shape[0]
         last = np.asarray(last, dtype=np.int64).ravel()
         K = sp.csr_matrix(K)
@@ -114,8 +118,12 @@ class SchurFactor:
             perm = nested_dissection(abs(K).tocsr(), points, last)
         self.perm = perm
         Kp = K[perm][:, perm].tocsc()
+        self.timings["ordering"] = time.perf_counter() - tick
+        tick = time.perf_counter()
         self.lu = spla.splu(Kp, permc_spec="NATURAL", diag_pivot_thresh=0.0,
                             options={"SymmetricMode": True})
+        self.timings["factorization"] = time.perf_counter() - tick
+        tick = time.perf_counter()
         c = len(last)
         tail = np.arange(n - c, n)
         if not (np.array_equal(self.lu.perm_c[n - c:], tail) and np.array_equal(self.lu.perm_r[n - c:], tail)):
@@ -124,12 +132,14 @@ class SchurFactor:
             E[tail, np.arange(c)] = 1.0
             self.S_inv = self.lu.solve(E)[tail]
         else:
-            L22 = self.lu.L[n - c:, n - c:].toarray()
-            U22 = self.lu.U[n - c:, n - c:].toarray()
-            S = L22 @ U22
+            # SPD without pivoting: U = D L^T, so S = L22 U22 = U22^T D22^{-1} U22
+            U22 = self.lu.U[:, n - c:][n - c:].toarray()
+            S = U22.T @ (U22 / np.diag(U22)[:, None])
             S = 0.5 * (S + S.T)
-            cho = __import__("scipy.linalg", fromlist=["cho_factor"])
-            self.S_inv = cho.cho_solve(cho.cho_factor(S), np.eye(c))
+            import scipy.linalg as sla
+
+            self.S_inv = sla.cho_solve(sla.cho_factor(S), np.eye(c))
+        self.timings["schur"] = time.perf_counter() - tick
         self.n = n
 
     def solve(self, b: NDArray[np.float64]) -> NDArray[np.float64]:

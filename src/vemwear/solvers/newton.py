@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
@@ -45,10 +46,16 @@ class NewtonOptions:
     block: int = 256
 
 
-def _active_set_step(J11, J12, y, lam, R, active, g):
+def _reduced_matrix(J11, J12, active):
+    """Columns of the Newton system for the unknowns dy_I (inactive) and dlam_A (active)."""
+    return np.hstack([J11[:, ~active], J12[:, active]])
+
+
+def _active_set_step(lu, J11, J12, y, lam, R, active, g):
     """Solve the Newton system for (dy, dlam) with dy_A = g_A - y_A and dlam_I = -lam_I.
 
-    J11 dy + J12 dlam = -R  (m equations); unknowns dy_I and dlam_A.
+    ``J11 dy + J12 dlam = -R`` (m equations); the unknowns are dy_I and dlam_A, and
+    ``lu`` factorizes their columns (:func:`_reduced_matrix`).
     """
     inactive = ~active
     dy = np.zeros_like(y)
@@ -56,8 +63,7 @@ def _active_set_step(J11, J12, y, lam, R, active, g):
     dy[active] = g[active] - y[active]
     dlam[inactive] = -lam[inactive]
     rhs = -R - J11[:, active] @ dy[active] - J12[:, inactive] @ dlam[inactive]
-    M = np.hstack([J11[:, inactive], J12[:, active]])
-    sol = np.linalg.solve(M, rhs)
+    sol = sla.lu_solve(lu, rhs)
     ni = int(inactive.sum())
     dy[inactive] = sol[:ni]
     dlam[active] = sol[ni:]
@@ -94,6 +100,10 @@ class CondensedNewton:
                 stop = min(start + self.options.block, 2 * m)
                 Cg[:, start:stop] = G @ self.factor.solve(G[start:stop].T.toarray())
             self.C_NN, self.C_NT = Cg[:m, :m], Cg[:m, m:]
+        self.A_norm = self.C_NN * system.omega[None, :]
+        self._eye = np.eye(m)
+        self._lu_cache: dict[bytes, tuple] = {}
+        self._fric_key: bytes | None = None
         self._F: NDArray | None = None
         self._uF: NDArray | None = None
         self._d: NDArray | None = None
@@ -112,39 +122,60 @@ class CondensedNewton:
         f = s.N.T @ (s.omega * (pa + lam)) + s.Tau.T @ (s.omega * step.fric * pa)
         return uF - self.factor.solve(f)
 
+    def recover_many(self, steps: list[StepData], lams: list[NDArray], ps: list[NDArray]) -> NDArray:
+        """Full displacements of several levels with one block solve, shape (nf, len(steps))."""
+        s = self.system
+        rhs = np.column_stack([
+            st.F - s.N.T @ (s.omega * (pa + lam)) - s.Tau.T @ (s.omega * st.fric * pa)
+            for st, lam, pa in zip(steps, lams, ps, strict=True)
+        ])
+        return self.factor.solve(rhs)
+
     def solve(self, step: StepData, guess: StepSolution | None = None, recover: bool = True) -> StepSolution:
+        """Solve one step problem on the contact unknowns (y = N u, lam).
+
+        With ``recover=False`` the full displacement is not computed (``u`` is None);
+        :meth:`recover_many` computes it later for several levels at once.
+        """
         s, opt = self.system, self.options
         _, d = self._displacement_of_load(step.F)
         if guess is not None:
             y, lam = np.array(guess.u_nu, copy=True), np.array(guess.lam, copy=True)
         else:
             y, lam = np.minimum(d, s.g), np.zeros(s.m)
+        A_norm = self.A_norm
         A_fric = self.C_NT * (s.omega * step.fric)[None, :]
-        A_norm = self.C_NN * s.omega[None, :]
+        fric_key = step.fric.tobytes()
+        if fric_key != self._fric_key:  # the Newton matrices depend on the friction direction
+            self._lu_cache.clear()
+            self._fric_key = fric_key
         it = 0
-        for it in range(1, opt.max_iter + 1):
+        while True:
             r = y - step.w
             pa, dp = s.p(r), s.p.derivative(r)
             R = y - d + A_norm @ (pa + lam) + A_fric @ pa
-            active = lam + s.c_ncp * (y - s.g) > 0
-            J11 = np.eye(s.m) + (A_norm + A_fric) * dp[None, :]
-            dy, dlam = _active_set_step(J11, A_norm, y, lam, R, active, s.g)
-            y, lam = y + dy, lam + dlam
-            scale = max(float(np.abs(s.g).max()), float(np.abs(y).max()))
-            if np.abs(dy).max() <= 1e-14 * scale and np.array_equal(
-                active, lam + s.c_ncp * (y - s.g) > 0
-            ):
+            res = _condensed_residuals(s, y, lam, R)
+            if max(res.values()) <= 0.1 * opt.tol or it == opt.max_iter:
                 break
+            it += 1
+            active = lam + s.c_ncp * (y - s.g) > 0
+            J11 = self._eye + (A_norm + A_fric) * dp[None, :]
+            key = active.tobytes() + dp.tobytes()
+            lu = self._lu_cache.get(key)
+            if lu is None:  # same active set and slopes as before: reuse the factorization
+                lu = sla.lu_factor(_reduced_matrix(J11, A_norm, active), check_finite=False)
+                if len(self._lu_cache) >= 8:
+                    self._lu_cache.pop(next(iter(self._lu_cache)))
+                self._lu_cache[key] = lu
+            dy, dlam = _active_set_step(lu, J11, A_norm, y, lam, R, active, s.g)
+            y, lam = y + dy, lam + dlam
         lam = np.maximum(lam, 0.0)
         pa = s.p(y - step.w)
+        u = None
         if recover:
             u = self.recover(step, lam, pa)
             res = kkt_residuals(s, step, u, lam)
             y = s.N @ u
-        else:
-            u = None
-            R = y - d + A_norm @ (pa + lam) + A_fric @ pa
-            res = _condensed_residuals(s, y, lam, R)
         check_converged(res, opt.tol, step, "semismooth Newton (condensed)", it)
         return StepSolution(u=u, u_nu=y, lam=lam, p=pa, iterations=it, residuals=res)
 

@@ -83,34 +83,53 @@ def strain_operator(area: NDArray, q: NDArray) -> NDArray[np.float64]:
     return B
 
 
-def projection_matrix(X: NDArray, xbar: NDArray, B: NDArray) -> NDArray[np.float64]:
+def _interleave(xx, xy, yx, yy):
+    """Assemble (m, 2n, 2n) from four (m, n, n) blocks: [2j + a, 2i + c] = block_ac[j, i]."""
+    m, n, _ = xx.shape
+    out = np.empty((m, 2 * n, 2 * n))
+    out[:, 0::2, 0::2], out[:, 0::2, 1::2] = xx, xy
+    out[:, 1::2, 0::2], out[:, 1::2, 1::2] = yx, yy
+    return out
+
+
+def projection_matrix(X: NDArray, xbar: NDArray, area: NDArray, q: NDArray) -> NDArray[np.float64]:
     """Matrix of the dofs of ``Pi v`` (its vertex values) in terms of the dofs of v.
 
     ``Pi v(x) = vbar + E (x - xbar) + omega J (x - xbar)`` where vbar is the vertex
     average of v (3.9), ``E = eps(Pi v)`` and omega solves (3.10):
-    ``omega = (sum_i d_i x v_i - sum_i d_i x E d_i) / sum_i |d_i|^2`` with ``d_i = x_i - xbar``.
-    Shape (m, 2n, 2n).
+    ``omega = (sum_i d_i x v_i - sum_i d_i x E d_i) / sum_i |d_i|^2``, ``d_i = x_i - xbar``.
+    For a symmetric E, ``sum_i d_i x E d_i = e_xy (S_xx - S_yy) + (e_yy - e_xx) S_xy`` with
+    the second moments ``S_ab = sum_i d_ia d_ib``. Shape (m, 2n, 2n), built from outer
+    products per component pair.
     """
     m, n, _ = X.shape
-    d = X - xbar[:, None, :]  # (m, n, 2)
-    exx, eyy, gxy = B[:, 0], B[:, 1], B[:, 2]  # (m, 2n) each: strain per unit dof
-    exy = 0.5 * gxy
-    # E_k d_j for every dof k and vertex j: (m, n, 2n) per component
-    Ed_x = d[..., 0:1] * exx[:, None, :] + d[..., 1:2] * exy[:, None, :]
-    Ed_y = d[..., 0:1] * exy[:, None, :] + d[..., 1:2] * eyy[:, None, :]
-    # sum_i d_i x E_k d_i
-    dxEd = np.sum(d[..., 0:1] * Ed_y - d[..., 1:2] * Ed_x, axis=1)  # (m, 2n)
-    # sum_i d_i x v_i for the unit dof k = (i, c): c = x -> -d_iy, c = y -> d_ix
-    dxv = np.empty((m, 2 * n))
-    dxv[:, 0::2] = -d[..., 1]
-    dxv[:, 1::2] = d[..., 0]
-    omega = (dxv - dxEd) / np.sum(d**2, axis=(1, 2))[:, None]  # (m, 2n)
-    P = np.zeros((m, 2 * n, 2 * n))
-    P[:, 0::2, 0::2] = 1.0 / n
-    P[:, 1::2, 1::2] = 1.0 / n
-    P[:, 0::2, :] += Ed_x - d[..., 1:2] * omega[:, None, :]  # J d = (-d_y, d_x)
-    P[:, 1::2, :] += Ed_y + d[..., 0:1] * omega[:, None, :]
-    return P
+    d = X - xbar[:, None, :]
+    dx, dy = d[..., 0], d[..., 1]  # (m, n)
+    qx, qy = q[..., 0] / area[:, None], q[..., 1] / area[:, None]
+    Sxx, Syy, Sxy = (np.sum(a * b, axis=1)[:, None] for a, b in ((dx, dx), (dy, dy), (dx, dy)))
+    Sdd = Sxx + Syy
+    # strain of the unit dofs: (i, x) -> exx = qx_i, exy = qy_i / 2; (i, y) -> eyy = qy_i, exy = qx_i / 2
+    # rotation of the unit dofs from (3.10)
+    om_x = (-dy - (0.5 * qy * (Sxx - Syy) - qx * Sxy)) / Sdd  # (m, n) over i
+    om_y = (dx - (0.5 * qx * (Sxx - Syy) + qy * Sxy)) / Sdd
+    o = lambda a, b: a[:, :, None] * b[:, None, :]  # noqa: E731  (m, n_j, n_i)
+    inv_n = 1.0 / n
+    xx = inv_n + o(dx, qx) + 0.5 * o(dy, qy) - o(dy, om_x)
+    xy = 0.5 * o(dy, qx) - o(dy, om_y)
+    yx = 0.5 * o(dx, qy) + o(dx, om_x)
+    yy = inv_n + 0.5 * o(dx, qx) + o(dy, qy) + o(dx, om_y)
+    return _interleave(xx, xy, yx, yy)
+
+
+def consistency_matrix(area: NDArray, q: NDArray, material: Material) -> NDArray[np.float64]:
+    """``|K| B^T D B``: the term ``a^K(Pi u, Pi v)`` of (3.11), from outer products of q."""
+    lam, eta = material.lam, material.eta
+    qx, qy = q[..., 0], q[..., 1]
+    o = lambda a, b: a[:, :, None] * b[:, None, :] / area[:, None, None]  # noqa: E731
+    XX, YY, XY = o(qx, qx), o(qy, qy), o(qx, qy)
+    YX = XY.transpose(0, 2, 1)
+    return _interleave((lam + 2 * eta) * XX + eta * YY, lam * XY + eta * YX,
+                       lam * YX + eta * XY, (lam + 2 * eta) * YY + eta * XX)
 
 
 def element_matrices(
@@ -141,8 +160,8 @@ def element_matrices(
         )
     area, xbar, q = geometry(X)
     B = strain_operator(area, q)
-    Kc = area[:, None, None] * np.einsum("mai,ab,mbj->mij", B, material.D, B)
-    P = projection_matrix(X, xbar, B)
+    Kc = consistency_matrix(area, q, material)
+    P = projection_matrix(X, xbar, area, q)
     m, n2, _ = P.shape
     IP = np.eye(n2)[None] - P
     if stabilization == "paper":
