@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 from tqdm.auto import tqdm
 
 from ..solvers import SOLVERS, NewtonOptions, StepSolution, UzawaOptions, kkt_residuals
-from ..solvers.system import check_converged
+from ..solvers.system import StepData, check_converged
 from .problem import Problem
 
 
@@ -74,6 +74,7 @@ class Result:
         lam and p are the pressures of the rigid and the soft layer
     iterations : (L,) solver iterations per level
     residuals : (L, 3) KKT residuals (equilibrium, feasibility, complementarity)
+    completed : number of finished levels (``L`` unless the run was interrupted)
     """
 
     problem: Problem
@@ -90,6 +91,7 @@ class Result:
     iterations: NDArray[np.int64]
     residuals: NDArray[np.float64]
     u_levels: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
+    completed: int = -1
     solver: dict[str, Any] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
 
@@ -98,6 +100,15 @@ class Result:
     @property
     def penetration(self) -> NDArray[np.float64]:
         return self.u_nu - self.wear
+
+    def __post_init__(self) -> None:
+        if self.completed < 0:
+            self.completed = len(self.t)
+
+    @property
+    def is_partial(self) -> bool:
+        """True for the levels-so-far of an interrupted run."""
+        return self.completed < len(self.t)
 
     def level(self, t: float) -> int:
         """Index of the level at time t."""
@@ -122,6 +133,7 @@ def simulate(
     progress: bool = False,
     store: str | ArrayLike = "all",
     recover_block: int = 32,
+    resume: Result | None = None,
     callback: Callable[[int, StepSolution], None] | None = None,
 ) -> Result:
     """Run the fully discrete scheme (Problem 3.3) on the problem's time grid.
@@ -134,10 +146,21 @@ def simulate(
     back-substitution per level with the condensed solver, so ``store`` chooses
     where it is recovered: ``"all"``, ``"final"``, or a list of times (levels).
 
+    Parameters
+    ----------
+    resume : Result, optional
+        A partial result of the same problem (``completed < len(t)``); the run goes on
+        from its first unfinished level, warm-started as an uninterrupted run would
+        be, so the result is the same.
+
     Raises
     ------
     ConvergenceError
         If a step does not reach the tolerance (the message names the level).
+    BaseException
+        Any error or interruption (KeyboardInterrupt) during the time loop carries the
+        levels finished so far as ``exc.partial_result`` (a :class:`Result` with
+        ``completed`` set) before it propagates.
     """
     opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
     timings: dict[str, float] = {}
@@ -160,18 +183,25 @@ def simulate(
         u_levels = np.arange(L) if store == "all" else np.array([L - 1])
     else:
         u_levels = np.unique(problem.time.index(store))
+    out = Result(
+        problem=problem, t=np.array(tgrid), points=problem.mesh.points.copy(),
+        u=np.zeros((len(u_levels), nv, 2)), contact_nodes=d.contact.nodes.copy(),
+        contact_s=d.contact.s.copy(), contact_points=d.contact.points.copy(),
+        wear=np.zeros((L, m)), u_nu=np.zeros((L, m)), lam=np.zeros((L, m)), p=np.zeros((L, m)),
+        iterations=np.zeros(L, dtype=np.int64), residuals=np.zeros((L, 3)), u_levels=u_levels,
+        solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
+        timings=timings, completed=0,
+    )
     slot = -np.ones(L, dtype=np.int64)
     slot[u_levels] = np.arange(len(u_levels))
-    U = np.zeros((len(u_levels), nv, 2))
-    W, Y, LAM, P = (np.zeros((L, m)) for _ in range(4))
-    iters = np.zeros(L, dtype=np.int64)
-    res = np.zeros((L, 3))
     w = np.zeros(m)
     guess: StepSolution | None = None
-    t2 = time.perf_counter()
+    if resume is not None:
+        w, guess = _restart(out, resume, slot, d)
+
     # with the condensed solver, full displacements are recovered in blocks of levels
     batch = hasattr(step_solver, "recover_many")
-    pending: list[tuple[int, object, StepSolution]] = []
+    pending: list[tuple[int, StepData, StepSolution]] = []
 
     def flush() -> None:
         if not pending:
@@ -179,42 +209,81 @@ def simulate(
         X = step_solver.recover_many([st for _, st, _ in pending], [so.lam for _, _, so in pending],
                                      [so.p for _, _, so in pending])
         for j, (n_, st, so) in enumerate(pending):
-            u_free = X[:, j]
-            U[slot[n_]] = d.full_displacement(u_free)
-            full = kkt_residuals(sysm, st, u_free, so.lam)  # type: ignore[arg-type]
-            check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)  # type: ignore[arg-type]
-            res[n_] = [full[k] for k in Result.RESIDUAL_NAMES]
+            full = kkt_residuals(sysm, st, X[:, j], so.lam)
+            check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)
+            out.u[slot[n_]] = d.full_displacement(X[:, j])
+            out.residuals[n_] = [full[k] for k in Result.RESIDUAL_NAMES]
         pending.clear()
 
-    bar = tqdm(range(L), desc="time levels", unit="lvl", disable=not progress, leave=False)
-    for n in bar:
-        step = d.step_data(n, w)
-        store_here = bool(slot[n] >= 0)
-        sol = step_solver.solve(step, guess, recover=store_here and not batch)
-        W[n], Y[n], LAM[n], P[n] = w, sol.u_nu, sol.lam, sol.p
-        iters[n] = sol.iterations
-        res[n] = [sol.residuals[k] for k in Result.RESIDUAL_NAMES]
-        if store_here:
-            if sol.u is not None:
-                U[slot[n]] = d.full_displacement(sol.u)
-            else:
-                pending.append((n, step, sol))
-                if len(pending) == recover_block:
-                    flush()
-        if callback is not None:
-            callback(n, sol)
-        if n + 1 < L:  # wear update (3.22), left rectangle rule
-            k_n = tgrid[n + 1] - tgrid[n]
-            w = w + k_n * d.alpha(step.t) * sol.p
-        guess = sol
-    flush()
+    t2 = time.perf_counter()
+    try:
+        bar = tqdm(range(out.completed, L), desc="time levels", unit="lvl", disable=not progress,
+                   leave=False)
+        for n in bar:
+            step = d.step_data(n, w)
+            store_here = bool(slot[n] >= 0)
+            sol = step_solver.solve(step, guess, recover=store_here and not batch)
+            out.wear[n], out.u_nu[n], out.lam[n], out.p[n] = w, sol.u_nu, sol.lam, sol.p
+            out.iterations[n] = sol.iterations
+            out.residuals[n] = [sol.residuals[k] for k in Result.RESIDUAL_NAMES]
+            if store_here:
+                if sol.u is not None:
+                    out.u[slot[n]] = d.full_displacement(sol.u)
+                else:
+                    pending.append((n, step, sol))
+                    # blocks at fixed positions among the stored levels: a resumed run
+                    # recovers the same blocks, so its results are bitwise the same
+                    if slot[n] % recover_block == recover_block - 1:
+                        flush()
+            if callback is not None:
+                callback(n, sol)
+            if n + 1 < L:  # wear update (3.22), left rectangle rule
+                w = w + (tgrid[n + 1] - tgrid[n]) * d.alpha(step.t) * sol.p
+            guess = sol
+            if not pending:  # every level so far is complete, displacements included
+                out.completed = n + 1
+        flush()
+        out.completed = L
+    except BaseException as exc:
+        # levels whose displacement block is not recovered yet count as unfinished
+        timings["time_loop"] = time.perf_counter() - t2
+        exc.partial_result = _truncate(out)  # type: ignore[attr-defined]
+        raise
     timings["time_loop"] = time.perf_counter() - t2
     timings["total"] = time.perf_counter() - t0
-    return Result(
-        problem=problem, t=np.array(tgrid), points=problem.mesh.points.copy(), u=U,
-        contact_nodes=d.contact.nodes.copy(), contact_s=d.contact.s.copy(),
-        contact_points=d.contact.points.copy(), wear=W, u_nu=Y, lam=LAM, p=P,
-        iterations=iters, residuals=res, u_levels=u_levels,
-        solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
-        timings=timings,
-    )
+    return out
+
+
+def _truncate(r: Result) -> Result:
+    """The partial result: levels ``< completed`` are valid, the rest zero."""
+    keep = r.u_levels < r.completed
+    return replace(r, u=r.u[keep].copy(), u_levels=r.u_levels[keep].copy())
+
+
+def _restart(out: Result, prev: Result, slot: NDArray[np.int64], d) -> tuple[NDArray, StepSolution | None]:
+    """Copy the finished levels of ``prev`` into ``out``; return w and the warm start."""
+    c = int(prev.completed)
+    if len(prev.t) != len(out.t) or not np.array_equal(prev.t, out.t):
+        raise ValueError("resume: the partial result has another time grid")
+    if prev.wear.shape[1] != out.wear.shape[1] or not np.array_equal(prev.contact_nodes, out.contact_nodes):
+        raise ValueError("resume: the partial result has other contact nodes (another mesh?)")
+    if c <= 0:
+        return np.zeros(out.wear.shape[1]), None
+    for name in ("wear", "u_nu", "lam", "p", "iterations", "residuals"):
+        getattr(out, name)[:c] = getattr(prev, name)[:c]
+    for j, lv in enumerate(prev.u_levels):
+        if lv < c and slot[lv] >= 0:
+            out.u[slot[lv]] = prev.u[j]
+    missing = [int(lv) for lv in out.u_levels if lv < c and lv not in set(prev.u_levels.tolist())]
+    if missing:
+        raise ValueError(f"resume: the partial result lacks the displacement at levels {missing[:5]}")
+    out.completed = c
+    if c == len(out.t):
+        return out.wear[-1].copy(), None
+    w = out.wear[c - 1] + (out.t[c] - out.t[c - 1]) * d.alpha(float(out.t[c - 1])) * out.p[c - 1]
+    u_last = None
+    if slot[c - 1] >= 0:
+        u_last = out.u[slot[c - 1]].ravel()[d.free]
+    guess = StepSolution(u=u_last, u_nu=out.u_nu[c - 1].copy(), lam=out.lam[c - 1].copy(),
+                         p=out.p[c - 1].copy(), iterations=0, residuals={})
+    return w, guess
