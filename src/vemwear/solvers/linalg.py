@@ -1,11 +1,13 @@
 """Sparse direct factorizations behind one interface, with an optional faster backend.
 
 ``factorize(A)`` returns an object with ``solve(b)`` for a vector or a block of
-right-hand sides. SciPy's SuperLU is the default (``"auto"`` and ``"scipy"``);
-PARDISO (``pypardiso``, the ``fast`` extra) is used when ``"pardiso"`` is asked for.
-``"auto"`` does not pick PARDISO: measured on this project's matrices it factorizes
-about as fast as SuperLU with nested dissection and its back-substitutions through
-pypardiso are slower (see ``benchmarks/``).
+right-hand sides. SciPy's SuperLU is always available. PARDISO (``pypardiso``, the
+``fast`` extra) factorizes large matrices several times faster but back-substitutes
+more slowly on this project's matrices (``benchmarks/bench_backends.py``), so
+``"auto"`` picks it only where factorizations dominate: ``factorize(A, "auto",
+many_factorizations=True)`` for matrices above :data:`PARDISO_MIN_SIZE` unknowns
+(the full-space Newton path). The condensed Newton path always uses SuperLU, whose
+factors give the Schur complement (:class:`SchurFactor`).
 """
 
 from __future__ import annotations
@@ -17,6 +19,9 @@ from numpy.typing import NDArray
 
 BACKENDS = ("auto", "scipy", "pardiso")
 
+#: Below this many unknowns SuperLU factorizes about as fast as PARDISO.
+PARDISO_MIN_SIZE = 20_000
+
 
 def _have_pardiso() -> bool:
     try:
@@ -27,13 +32,13 @@ def _have_pardiso() -> bool:
 
 
 class SuperLUFactor:
-    """SuperLU with a symmetric fill-reducing ordering (the matrices here are SPD)."""
+    """SuperLU with a symmetric fill-reducing ordering (symmetric mode for SPD matrices)."""
 
     name = "scipy"
 
-    def __init__(self, A: sp.spmatrix) -> None:
-        self.lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A",
-                            options={"SymmetricMode": True})
+    def __init__(self, A: sp.spmatrix, symmetric: bool = True) -> None:
+        opts = {"SymmetricMode": True} if symmetric else {}
+        self.lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", options=opts)
 
     def solve(self, b: NDArray[np.float64]) -> NDArray[np.float64]:
         return self.lu.solve(np.asarray(b, dtype=float))
@@ -52,26 +57,32 @@ class PardisoFactor:
         self.A = sp.csr_matrix(A)
         self.A.sort_indices()
         self.solver.factorize(self.A)
+        self.solver.set_phase(33)  # solve only, with the factorization above
 
     def solve(self, b: NDArray[np.float64]) -> NDArray[np.float64]:
-        b = np.ascontiguousarray(b, dtype=float)
-        return np.asarray(self.solver.solve(self.A, b))
+        # pypardiso's public solve() compares the whole matrix with the factorized one
+        # on every call; the matrix is fixed here, so call the solve phase directly
+        b = np.asfortranarray(b, dtype=float)
+        return np.asarray(self.solver._call_pardiso(self.A, b))
 
 
-def resolve_backend(backend: str = "auto") -> str:
+def resolve_backend(backend: str = "auto", size: int = 0, many_factorizations: bool = False) -> str:
+    """The backend that ``factorize`` uses for a matrix of ``size`` unknowns."""
     if backend not in BACKENDS:
         raise ValueError(f"unknown linear-algebra backend {backend!r}; expected one of {BACKENDS}")
     if backend == "auto":
-        return "scipy"
+        fast = many_factorizations and size >= PARDISO_MIN_SIZE and _have_pardiso()
+        return "pardiso" if fast else "scipy"
     if backend == "pardiso" and not _have_pardiso():
         raise ValueError("backend 'pardiso' asked for but pypardiso is not installed "
                          "(pip install 'vemwear[fast]')")
     return backend
 
 
-def factorize(A: sp.spmatrix, backend: str = "auto"):
+def factorize(A: sp.spmatrix, backend: str = "auto", many_factorizations: bool = False):
     """Factorize a sparse matrix once; the result solves for any number of right-hand sides."""
-    return PardisoFactor(A) if resolve_backend(backend) == "pardiso" else SuperLUFactor(A)
+    chosen = resolve_backend(backend, A.shape[0], many_factorizations)
+    return PardisoFactor(A) if chosen == "pardiso" else SuperLUFactor(A, symmetric=not many_factorizations)
 
 
 class SchurFactor:

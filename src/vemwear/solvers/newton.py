@@ -221,7 +221,7 @@ class FullNewton:
             rhs = np.concatenate([-r0, s.g[active] - NA @ u])
             if nA == 0:
                 M, rhs = sp.csc_matrix(J), -r0
-            sol = spla.splu(M).solve(rhs)
+            sol = factorize(M, opt.backend, many_factorizations=True).solve(rhs)
             du = sol[: s.n_free]
             lam_new = np.zeros(s.m)
             lam_new[active] = sol[s.n_free:]
