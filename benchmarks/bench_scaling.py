@@ -46,25 +46,30 @@ def _case(n: int, store: str, uzawa: bool, backend: str) -> dict:
     out["mesh_s"] = time.perf_counter() - t0
     levels = np.arange(0, 65) / 64 if n >= 64 and store == "paper" else None
     t1 = time.perf_counter()
-    res = simulate(problem, SolverOptions("newton", backend=backend),
-                   store=levels if levels is not None else "all")
+    res = simulate(
+        problem,
+        SolverOptions("newton", backend=backend),
+        store=levels if levels is not None else "all",
+    )
     out["wall_s"] = time.perf_counter() - t1 + out["mesh_s"]
     tm = res.timings
-    out.update({
-        "unknowns": int(problem.discrete.system.n_free),
-        "contact_nodes": int(problem.discrete.system.m),
-        "levels": len(res.t),
-        "stored_levels": len(res.u_levels),
-        "assembly_s": tm["assembly"],
-        "ordering_s": tm.get("setup_ordering", float("nan")),
-        "factorization_s": tm.get("setup_factorization", float("nan")),
-        "schur_s": tm.get("setup_schur", float("nan")),
-        "time_loop_s": tm["time_loop"],
-        "per_step_ms": 1e3 * tm["time_loop"] / len(res.t),
-        "newton_iterations": int(res.iterations.sum()),
-        "max_residual": float(res.residuals.max()),
-        "max_wear_T": float(res.wear[-1].max()),
-    })
+    out.update(
+        {
+            "unknowns": int(problem.discrete.system.n_free),
+            "contact_nodes": int(problem.discrete.system.m),
+            "levels": len(res.t),
+            "stored_levels": len(res.u_levels),
+            "assembly_s": tm["assembly"],
+            "ordering_s": tm.get("setup_ordering", float("nan")),
+            "factorization_s": tm.get("setup_factorization", float("nan")),
+            "schur_s": tm.get("setup_schur", float("nan")),
+            "time_loop_s": tm["time_loop"],
+            "per_step_ms": 1e3 * tm["time_loop"] / len(res.t),
+            "newton_iterations": int(res.iterations.sum()),
+            "max_residual": float(res.residuals.max()),
+            "max_wear_T": float(res.wear[-1].max()),
+        }
+    )
     out["peak_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     # the floor: one plain factorization and one solve of the same matrix
     K = problem.discrete.system.K.tocsc()
@@ -91,18 +96,25 @@ def _example_5_2() -> dict:
     rows = []
     for mu, kappa in [(0.2, 2.0), (0.2, 10.0), (0.6, 10.0)]:
         pr = ex52.problem(mu, kappa)
-        pr.discrete  # assembly is not part of the solve
+        _ = pr.discrete  # assembly is not part of the solve
         t = time.perf_counter()
         rn = simulate(pr, SolverOptions("newton"))
         tn = time.perf_counter() - t
         t = time.perf_counter()
         ru = simulate(pr, SolverOptions("uzawa"))
         tu = time.perf_counter() - t
-        rows.append({
-            "mu": mu, "kappa": kappa, "newton_s": tn, "uzawa_s": tu, "speedup": tu / tn,
-            "newton_iterations": int(rn.iterations.sum()), "uzawa_iterations": int(ru.iterations.sum()),
-            "max_rel_diff_u": float(np.abs(ru.u - rn.u).max() / np.abs(rn.u).max()),
-        })
+        rows.append(
+            {
+                "mu": mu,
+                "kappa": kappa,
+                "newton_s": tn,
+                "uzawa_s": tu,
+                "speedup": tu / tn,
+                "newton_iterations": int(rn.iterations.sum()),
+                "uzawa_iterations": int(ru.iterations.sum()),
+                "max_rel_diff_u": float(np.abs(ru.u - rn.u).max() / np.abs(rn.u).max()),
+            }
+        )
     return {"rows": rows}
 
 
@@ -128,12 +140,23 @@ def _run_child(args: list[str]) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--n", type=int, nargs="+", default=[16, 32, 64, 128, 256],
-                    help="1/h values (k = h); default 16 32 64 128 256")
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    ap.add_argument(
+        "--n",
+        type=int,
+        nargs="+",
+        default=[16, 32, 64, 128, 256],
+        help="1/h values (k = h); default 16 32 64 128 256",
+    )
     ap.add_argument("--uzawa-max-n", type=int, default=32, help="run Uzawa up to this 1/h")
-    ap.add_argument("--store", choices=["all", "paper"], default="paper",
-                    help="levels whose displacement is recovered: all, or Example 5.5's (multiples of 1/64)")
+    ap.add_argument(
+        "--store",
+        choices=["all", "paper"],
+        default="paper",
+        help="levels whose displacement is recovered: all, or Example 5.5's (multiples of 1/64)",
+    )
     ap.add_argument("--backend", default="auto")
     ap.add_argument("--example-5-2", action="store_true", help="Example 5.2: Newton against Uzawa")
     ap.add_argument("--json", help="also write the rows to this JSON file")
@@ -150,24 +173,35 @@ def main(argv: list[str] | None = None) -> int:
     if a.example_5_2:
         out = _run_child(["ex52"])
         print("\nExample 5.2 (h = 1/16, k = 1/64): solve time, same tolerance 1e-10")
-        print(f"{'mu':>5} {'kappa':>6} {'newton s':>9} {'uzawa s':>9} {'speedup':>8} {'rel diff u':>11}")
+        print(
+            f"{'mu':>5} {'kappa':>6} {'newton s':>9} {'uzawa s':>9} {'speedup':>8} {'rel diff u':>11}"
+        )
         for r in out["rows"]:
-            print(f"{r['mu']:5.1f} {r['kappa']:6.1f} {r['newton_s']:9.3f} {r['uzawa_s']:9.2f} "
-                  f"{r['speedup']:8.0f} {r['max_rel_diff_u']:11.1e}")
+            print(
+                f"{r['mu']:5.1f} {r['kappa']:6.1f} {r['newton_s']:9.3f} {r['uzawa_s']:9.2f} "
+                f"{r['speedup']:8.0f} {r['max_rel_diff_u']:11.1e}"
+            )
         tot = sum(r["newton_s"] for r in out["rows"])
         print(f"Newton, three data sets: {tot:.3f} s")
         rows = out["rows"]
     else:
-        rows = [_run_child([str(n), a.store, "1" if n <= a.uzawa_max_n else "0", a.backend]) for n in a.n]
-        hdr = (f"{'1/h':>5} {'unknowns':>9} {'levels':>6} {'assembly':>8} {'ordering':>8} {'factor':>7} "
-               f"{'schur':>6} {'step ms':>8} {'loop':>6} {'total':>6} {'peak MB':>8} {'floor':>6} {'uzawa':>7}")
+        rows = [
+            _run_child([str(n), a.store, "1" if n <= a.uzawa_max_n else "0", a.backend])
+            for n in a.n
+        ]
+        hdr = (
+            f"{'1/h':>5} {'unknowns':>9} {'levels':>6} {'assembly':>8} {'ordering':>8} {'factor':>7} "
+            f"{'schur':>6} {'step ms':>8} {'loop':>6} {'total':>6} {'peak MB':>8} {'floor':>6} {'uzawa':>7}"
+        )
         print("\ntimes in seconds; total = mesh + assembly + setup + time loop (with recovery)")
         print(hdr)
         for r in rows:
             uz = f"{r['uzawa_s']:7.1f}" if "uzawa_s" in r else f"{'-':>7}"
-            print(f"{r['n']:5d} {r['unknowns']:9d} {r['levels']:6d} {r['assembly_s']:8.2f} {r['ordering_s']:8.2f} "
-                  f"{r['factorization_s']:7.2f} {r['schur_s']:6.2f} {r['per_step_ms']:8.1f} "
-                  f"{r['time_loop_s']:6.2f} {r['wall_s']:6.2f} {r['peak_MB']:8.0f} {r['floor_s']:6.2f} {uz}")
+            print(
+                f"{r['n']:5d} {r['unknowns']:9d} {r['levels']:6d} {r['assembly_s']:8.2f} {r['ordering_s']:8.2f} "
+                f"{r['factorization_s']:7.2f} {r['schur_s']:6.2f} {r['per_step_ms']:8.1f} "
+                f"{r['time_loop_s']:6.2f} {r['wall_s']:6.2f} {r['peak_MB']:8.0f} {r['floor_s']:6.2f} {uz}"
+            )
     if a.json:
         with open(a.json, "w") as f:
             json.dump(rows, f, indent=1)

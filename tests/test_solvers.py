@@ -17,9 +17,16 @@ def paper_problem(divisions=(16, 8), steps=16, mu=0.2, kappa=2.0, time=None, **k
     """Section 5 data on a coarser mesh."""
     mesh = tag_rectangle(rectangle_squares((2.0, 1.0), divisions))
     return Problem(
-        mesh, Material(4.0, 4.0), time or TimeGrid.uniform(1.0, steps), f1=(0.0, -0.06),
-        p=kw.pop("p", LinearCompliance(0.4)), g=kw.pop("g", 0.1), mu=mu, kappa=kappa,
-        v_star=kw.pop("v_star", (1.0, 0.0)), **kw,
+        mesh,
+        Material(4.0, 4.0),
+        time or TimeGrid.uniform(1.0, steps),
+        f1=(0.0, -0.06),
+        p=kw.pop("p", LinearCompliance(0.4)),
+        g=kw.pop("g", 0.1),
+        mu=mu,
+        kappa=kappa,
+        v_star=kw.pop("v_star", (1.0, 0.0)),
+        **kw,
     )
 
 
@@ -113,8 +120,10 @@ def test_solution_satisfies_the_variational_inequality(small):
         v_nodes[cb.nodes] -= over[:, None] * cb.normals
         v = v_nodes.ravel()
         assert np.all(cb.N @ v <= d.g + 1e-14)
-        lhs = (K @ u) @ (v - u) + phi_h(cb, pr.p, d.mu, n_star, w, u, v) - phi_h(
-            cb, pr.p, d.mu, n_star, w, u, u
+        lhs = (
+            (K @ u) @ (v - u)
+            + phi_h(cb, pr.p, d.mu, n_star, w, u, v)
+            - phi_h(cb, pr.p, d.mu, n_star, w, u, u)
         )
         assert lhs - fh @ (v - u) >= -1e-12 * np.abs(fh).sum()
 
@@ -128,7 +137,9 @@ def test_wear_is_left_rectangle_rule_on_nonuniform_grid():
     p = 0.4 * np.maximum(r.u_nu - r.wear, 0.0)
     assert np.allclose(r.p, p, rtol=0, atol=1e-14)
     k = np.diff(r.t)
-    expected = np.cumsum(np.vstack([np.zeros(r.wear.shape[1]), k[:, None] * 2.0 * 2.0 * p[:-1]]), axis=0)
+    expected = np.cumsum(
+        np.vstack([np.zeros(r.wear.shape[1]), k[:, None] * 2.0 * 2.0 * p[:-1]]), axis=0
+    )
     assert np.allclose(r.wear, expected, rtol=1e-13, atol=1e-15)
 
 
@@ -145,7 +156,10 @@ def test_paper_findings_example_5_2():
     for mu, kappa in [(0.2, 2.0), (0.2, 10.0), (0.6, 10.0)]:
         r = simulate(paper_problem(divisions=(32, 16), steps=64, mu=mu, kappa=kappa))
         wmax[mu, kappa] = r.wear[-1]
-    assert np.all(wmax[0.2, 10.0] >= wmax[0.2, 2.0]) and wmax[0.2, 10.0].max() > 1.5 * wmax[0.2, 2.0].max()
+    assert (
+        np.all(wmax[0.2, 10.0] >= wmax[0.2, 2.0])
+        and wmax[0.2, 10.0].max() > 1.5 * wmax[0.2, 2.0].max()
+    )
     assert wmax[0.6, 10.0].sum() < wmax[0.2, 10.0].sum()
 
 
@@ -153,8 +167,13 @@ def test_time_dependent_velocity_and_table_law():
     """v*(t) reversing direction and a piecewise-linear law run and keep the KKT tolerance."""
     vs = {"t": [0.0, 0.5, 1.0], "values": [[1.0, 0.0], [1.0, 0.0], [-2.0, 0.0]]}
     law = TableCompliance((0.0, 0.05, 0.5), (0.0, 0.01, 0.5))
-    pr = paper_problem(divisions=(8, 4), steps=10, p=law, v_star=vs,
-                       g={"along": "x", "at": [0.0, 2.0], "values": [0.12, 0.08]})
+    pr = paper_problem(
+        divisions=(8, 4),
+        steps=10,
+        p=law,
+        v_star=vs,
+        g={"along": "x", "at": [0.0, 2.0], "values": [0.12, 0.08]},
+    )
     r = simulate(pr)
     assert np.all(r.residuals <= 1e-10)
     assert np.all(np.diff(r.wear, axis=0) >= -1e-15)

@@ -11,14 +11,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, Union
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .boundary import ContactBoundary
 
-NodalField = Union[float, Mapping[str, Any], Callable[[NDArray[np.float64]], ArrayLike]]
+NodalField = float | Mapping[str, Any] | Callable[[NDArray[np.float64]], ArrayLike]
 
 
 def nodal_values(spec: NodalField, cb: ContactBoundary, name: str) -> NDArray[np.float64]:

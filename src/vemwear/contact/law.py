@@ -73,7 +73,8 @@ class TableCompliance(ComplianceLaw):
             raise ValueError("compliance table: r and p must be finite numbers")
         if r[0] != 0.0 or p[0] != 0.0:
             raise ValueError(
-                f"compliance table: must start at r = 0 with p = 0 (got r[0] = {r[0]}, p[0] = {p[0]}),"
+                "compliance table: must start at r = 0 with p = 0 "
+                f"(got r[0] = {r[0]}, p[0] = {p[0]}),"
                 " since p(r) = 0 for r <= 0"
             )
         if np.any(np.diff(r) <= 0):
@@ -83,7 +84,8 @@ class TableCompliance(ComplianceLaw):
         if np.any(slopes < 0):
             i = int(np.flatnonzero(slopes < 0)[0])
             raise ValueError(
-                f"compliance table: p must be non-decreasing (p[{i}] = {p[i]} > p[{i + 1}] = {p[i + 1]})"
+                "compliance table: p must be non-decreasing "
+                f"(p[{i}] = {p[i]} > p[{i + 1}] = {p[i + 1]})"
             )
         object.__setattr__(self, "r", tuple(r.tolist()))
         object.__setattr__(self, "p", tuple(p.tolist()))

@@ -20,4 +20,6 @@ def phi_h(
 ) -> float:
     """``phi_h(t, w, u, v) = sum_a omega_a p(u_nu(a) - w_a) (v_nu(a) + mu_a n* . v_tau(a))``."""
     pa = p(cb.N @ u - w)
-    return float(np.sum(cb.weights * pa * (cb.N @ v + mu * cb.friction_direction(n_star) * (cb.Tau @ v))))
+    return float(
+        np.sum(cb.weights * pa * (cb.N @ v + mu * cb.friction_direction(n_star) * (cb.Tau @ v)))
+    )

@@ -24,7 +24,7 @@ def _scale(mesh: Mesh) -> float:
 
 def check_cells(mesh: Mesh, rtol: float = 1e-12) -> None:
     """Cells are counter-clockwise, non-degenerate, simple, with distinct vertices."""
-    for n, (ids, verts) in mesh.groups.items():
+    for _n, (ids, verts) in mesh.groups.items():
         s = np.sort(verts, axis=1)
         rep = np.any(s[:, 1:] == s[:, :-1], axis=1)
         if np.any(rep):
@@ -32,7 +32,9 @@ def check_cells(mesh: Mesh, rtol: float = 1e-12) -> None:
     area = mesh.cell_areas
     tiny = rtol * mesh.cell_diameters**2
     if np.any(np.abs(area) <= tiny):
-        raise MeshError(f"cells {_ids(np.flatnonzero(np.abs(area) <= tiny))} are degenerate (zero area)")
+        raise MeshError(
+            f"cells {_ids(np.flatnonzero(np.abs(area) <= tiny))} are degenerate (zero area)"
+        )
     if np.any(area < 0):
         raise MeshError(
             f"cells {_ids(np.flatnonzero(area < 0))} are clockwise; cells must be counter-clockwise"
@@ -54,8 +56,8 @@ def check_simple(mesh: Mesh) -> None:
         q, s = A[:, j], B[:, j] - A[:, j]
         rxs = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
         qp = q - p
-        t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0])
-        u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0])
+        t = qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]
+        u = qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]
         with np.errstate(divide="ignore", invalid="ignore"):
             t, u = t / rxs, u / rxs
         eps = 1e-12

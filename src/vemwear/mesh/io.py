@@ -24,7 +24,9 @@ def to_meshio(mesh: Mesh, with_boundary: bool = True) -> meshio.Mesh:
     blocks = []
     for n, (_ids, verts) in sorted(mesh.groups.items()):
         blocks.append(meshio.CellBlock(_BLOCK.get(n, "polygon"), verts))
-    cell_data: dict[str, list[np.ndarray]] = {"part": [np.zeros(len(b.data), np.int32) for b in blocks]}
+    cell_data: dict[str, list[np.ndarray]] = {
+        "part": [np.zeros(len(b.data), np.int32) for b in blocks]
+    }
     cell_ids = [ids.astype(np.int64) for _, (ids, _v) in sorted(mesh.groups.items())]
     cell_data["cell_id"] = cell_ids
     if with_boundary and len(mesh.boundary_edges):

@@ -80,7 +80,8 @@ class Mesh:
             bad = np.flatnonzero((cv < 0) | (cv >= len(pts)))
             cells = np.searchsorted(off, bad, side="right") - 1
             raise MeshError(
-                f"cells {np.unique(cells)[:10].tolist()} refer to vertex ids outside 0..{len(pts) - 1}"
+                f"cells {np.unique(cells)[:10].tolist()} refer to vertex ids "
+                f"outside 0..{len(pts) - 1}"
             )
         object.__setattr__(self, "points", pts)
         object.__setattr__(self, "cell_offsets", off)
@@ -256,7 +257,9 @@ class Mesh:
                 continue
             hit = np.asarray(pred(mid), dtype=bool)
             if hit.shape != (len(mid),):
-                raise ValueError(f"boundary part {name!r}: predicate must return shape ({len(mid)},)")
+                raise ValueError(
+                    f"boundary part {name!r}: predicate must return shape ({len(mid)},)"
+                )
             tags[hit & ~protected] = code
         for name in rest:
             tags[tags == UNTAGGED] = part_code(name)
@@ -268,7 +271,9 @@ class Mesh:
         """Signed areas (positive for counter-clockwise cells), shoelace formula."""
         a, b = self.directed_edges[:, 0], self.directed_edges[:, 1]
         # coordinates relative to the first vertex of each cell keep the sum accurate
-        ref = np.repeat(self.points[self.cell_vertices[self.cell_offsets[:-1]]], self.cell_sizes, axis=0)
+        ref = np.repeat(
+            self.points[self.cell_vertices[self.cell_offsets[:-1]]], self.cell_sizes, axis=0
+        )
         pa, pb = self.points[a] - ref, self.points[b] - ref
         cross = pa[:, 0] * pb[:, 1] - pb[:, 0] * pa[:, 1]
         return 0.5 * np.bincount(self.edge_cells, weights=cross, minlength=self.n_cells)

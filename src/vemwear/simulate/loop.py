@@ -42,7 +42,9 @@ class SolverOptions:
 
     def __post_init__(self) -> None:
         if self.method not in SOLVERS:
-            raise ValueError(f"solver: unknown method {self.method!r}; expected one of {list(SOLVERS)}")
+            raise ValueError(
+                f"solver: unknown method {self.method!r}; expected one of {list(SOLVERS)}"
+            )
         if not (self.tol > 0):
             raise ValueError(f"solver: tol must be positive, got {self.tol}")
         if self.max_iter is not None and self.max_iter < 1:
@@ -184,13 +186,23 @@ def simulate(
     else:
         u_levels = np.unique(problem.time.index(store))
     out = Result(
-        problem=problem, t=np.array(tgrid), points=problem.mesh.points.copy(),
-        u=np.zeros((len(u_levels), nv, 2)), contact_nodes=d.contact.nodes.copy(),
-        contact_s=d.contact.s.copy(), contact_points=d.contact.points.copy(),
-        wear=np.zeros((L, m)), u_nu=np.zeros((L, m)), lam=np.zeros((L, m)), p=np.zeros((L, m)),
-        iterations=np.zeros(L, dtype=np.int64), residuals=np.zeros((L, 3)), u_levels=u_levels,
+        problem=problem,
+        t=np.array(tgrid),
+        points=problem.mesh.points.copy(),
+        u=np.zeros((len(u_levels), nv, 2)),
+        contact_nodes=d.contact.nodes.copy(),
+        contact_s=d.contact.s.copy(),
+        contact_points=d.contact.points.copy(),
+        wear=np.zeros((L, m)),
+        u_nu=np.zeros((L, m)),
+        lam=np.zeros((L, m)),
+        p=np.zeros((L, m)),
+        iterations=np.zeros(L, dtype=np.int64),
+        residuals=np.zeros((L, 3)),
+        u_levels=u_levels,
         solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
-        timings=timings, completed=0,
+        timings=timings,
+        completed=0,
     )
     slot = -np.ones(L, dtype=np.int64)
     slot[u_levels] = np.arange(len(u_levels))
@@ -206,8 +218,11 @@ def simulate(
     def flush() -> None:
         if not pending:
             return
-        X = step_solver.recover_many([st for _, st, _ in pending], [so.lam for _, _, so in pending],
-                                     [so.p for _, _, so in pending])
+        X = step_solver.recover_many(
+            [st for _, st, _ in pending],
+            [so.lam for _, _, so in pending],
+            [so.p for _, _, so in pending],
+        )
         for j, (n_, st, so) in enumerate(pending):
             full = kkt_residuals(sysm, st, X[:, j], so.lam)
             check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)
@@ -217,8 +232,13 @@ def simulate(
 
     t2 = time.perf_counter()
     try:
-        bar = tqdm(range(out.completed, L), desc="time levels", unit="lvl", disable=not progress,
-                   leave=False)
+        bar = tqdm(
+            range(out.completed, L),
+            desc="time levels",
+            unit="lvl",
+            disable=not progress,
+            leave=False,
+        )
         for n in bar:
             step = d.step_data(n, w)
             store_here = bool(slot[n] >= 0)
@@ -260,12 +280,16 @@ def _truncate(r: Result) -> Result:
     return replace(r, u=r.u[keep].copy(), u_levels=r.u_levels[keep].copy())
 
 
-def _restart(out: Result, prev: Result, slot: NDArray[np.int64], d) -> tuple[NDArray, StepSolution | None]:
+def _restart(
+    out: Result, prev: Result, slot: NDArray[np.int64], d
+) -> tuple[NDArray, StepSolution | None]:
     """Copy the finished levels of ``prev`` into ``out``; return w and the warm start."""
     c = int(prev.completed)
     if len(prev.t) != len(out.t) or not np.array_equal(prev.t, out.t):
         raise ValueError("resume: the partial result has another time grid")
-    if prev.wear.shape[1] != out.wear.shape[1] or not np.array_equal(prev.contact_nodes, out.contact_nodes):
+    if prev.wear.shape[1] != out.wear.shape[1] or not np.array_equal(
+        prev.contact_nodes, out.contact_nodes
+    ):
         raise ValueError("resume: the partial result has other contact nodes (another mesh?)")
     if c <= 0:
         return np.zeros(out.wear.shape[1]), None
@@ -276,7 +300,9 @@ def _restart(out: Result, prev: Result, slot: NDArray[np.int64], d) -> tuple[NDA
             out.u[slot[lv]] = prev.u[j]
     missing = [int(lv) for lv in out.u_levels if lv < c and lv not in set(prev.u_levels.tolist())]
     if missing:
-        raise ValueError(f"resume: the partial result lacks the displacement at levels {missing[:5]}")
+        raise ValueError(
+            f"resume: the partial result lacks the displacement at levels {missing[:5]}"
+        )
     out.completed = c
     if c == len(out.t):
         return out.wear[-1].copy(), None
@@ -284,6 +310,12 @@ def _restart(out: Result, prev: Result, slot: NDArray[np.int64], d) -> tuple[NDA
     u_last = None
     if slot[c - 1] >= 0:
         u_last = out.u[slot[c - 1]].ravel()[d.free]
-    guess = StepSolution(u=u_last, u_nu=out.u_nu[c - 1].copy(), lam=out.lam[c - 1].copy(),
-                         p=out.p[c - 1].copy(), iterations=0, residuals={})
+    guess = StepSolution(
+        u=u_last,
+        u_nu=out.u_nu[c - 1].copy(),
+        lam=out.lam[c - 1].copy(),
+        p=out.p[c - 1].copy(),
+        iterations=0,
+        residuals={},
+    )
     return w, guess

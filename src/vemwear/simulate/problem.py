@@ -75,7 +75,9 @@ class Problem:
         check_law(self.p, scale=scale)
         for level, t in enumerate(self.time.t):
             if np.linalg.norm(self.v_star(t)) == 0.0:
-                raise ValueError(f"v_star vanishes at t = {t:g} (level {level}); H0(c) needs v* != 0")
+                raise ValueError(
+                    f"v_star vanishes at t = {t:g} (level {level}); H0(c) needs v* != 0"
+                )
 
     @cached_property
     def contact(self) -> ContactBoundary:
@@ -116,8 +118,12 @@ class Problem:
 
         m = self.mesh
         return {
-            "mesh": {"points": m.n_points, "cells": m.n_cells, "h": m.h,
-                     "cells_by_vertex_count": {str(n): len(i) for n, (i, _) in m.groups.items()}},
+            "mesh": {
+                "points": m.n_points,
+                "cells": m.n_cells,
+                "h": m.h,
+                "cells_by_vertex_count": {str(n): len(i) for n, (i, _) in m.groups.items()},
+            },
             "material": {"lam": self.material.lam, "eta": self.material.eta},
             "time": self.time.describe(),
             "f1": desc(self.f1),
@@ -151,8 +157,14 @@ class Discretization:
         index[self.free] = np.arange(len(self.free))
         cdofs = index[np.column_stack([2 * cb.nodes, 2 * cb.nodes + 1])]
         self.system = ContactSystem(
-            K=K, contact_dofs=cdofs, normals=cb.normals, tangents=cb.tangents,
-            omega=cb.weights, g=self.g, p=problem.p, dof_points=mesh.points[self.free // 2],
+            K=K,
+            contact_dofs=cdofs,
+            normals=cb.normals,
+            tangents=cb.tangents,
+            omega=cb.weights,
+            g=self.g,
+            p=problem.p,
+            dof_points=mesh.points[self.free // 2],
         )
         self._constant_load = not (callable(problem.f1) or callable(problem.f2))
         self._F0: NDArray | None = None
@@ -202,7 +214,7 @@ class Discretization:
         try:
             vals = spla.eigsh(Mc, k=1, M=s.K.tocsc(), which="LA", return_eigenvectors=False)
             ratio = float(vals[0])  # max of ||v||^2_Gc / a_h(v, v) = c_0^2 / C_1
-        except Exception:  # noqa: BLE001 - an estimate only
+        except Exception:
             return {"ratio": float("nan")}
         Lp = float(self.problem.p.lipschitz)
         value = Lp * float(np.abs(self.mu).max(initial=0)) * ratio
@@ -212,5 +224,9 @@ class Discretization:
                 f"~= {value:.3g} >= 1; the step problem may have no unique solution",
                 stacklevel=2,
             )
-        return {"c0_sq_over_C1": ratio, "L_p": Lp, "mu_max": float(np.abs(self.mu).max(initial=0)),
-                "ratio": value}
+        return {
+            "c0_sq_over_C1": ratio,
+            "L_p": Lp,
+            "mu_max": float(np.abs(self.mu).max(initial=0)),
+            "ratio": value,
+        }

@@ -26,7 +26,8 @@ class TimeGrid:
         if np.any(np.diff(t) <= 0):
             i = int(np.flatnonzero(np.diff(t) <= 0)[0])
             raise ValueError(
-                f"time grid: levels must increase strictly (t[{i}] = {t[i]:g}, t[{i + 1}] = {t[i + 1]:g})"
+                "time grid: levels must increase strictly "
+                f"(t[{i}] = {t[i]:g}, t[{i + 1}] = {t[i + 1]:g})"
             )
         t.setflags(write=False)
         object.__setattr__(self, "t", t)
@@ -89,6 +90,9 @@ class TimeGrid:
 
     def describe(self) -> dict:
         k = self.k
-        return {"T": self.T, "levels": len(self.t),
-                "k_min": float(k.min()) if k.size else 0.0,
-                "k_max": float(k.max()) if k.size else 0.0}
+        return {
+            "T": self.T,
+            "levels": len(self.t),
+            "k_min": float(k.min()) if k.size else 0.0,
+            "k_max": float(k.max()) if k.size else 0.0,
+        }

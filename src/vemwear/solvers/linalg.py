@@ -74,15 +74,21 @@ def resolve_backend(backend: str = "auto", size: int = 0, many_factorizations: b
         fast = many_factorizations and size >= PARDISO_MIN_SIZE and _have_pardiso()
         return "pardiso" if fast else "scipy"
     if backend == "pardiso" and not _have_pardiso():
-        raise ValueError("backend 'pardiso' asked for but pypardiso is not installed "
-                         "(pip install 'vemwear[fast]')")
+        raise ValueError(
+            "backend 'pardiso' asked for but pypardiso is not installed "
+            "(pip install 'vemwear[fast]')"
+        )
     return backend
 
 
 def factorize(A: sp.spmatrix, backend: str = "auto", many_factorizations: bool = False):
     """Factorize a sparse matrix once; the result solves for any number of right-hand sides."""
     chosen = resolve_backend(backend, A.shape[0], many_factorizations)
-    return PardisoFactor(A) if chosen == "pardiso" else SuperLUFactor(A, symmetric=not many_factorizations)
+    return (
+        PardisoFactor(A)
+        if chosen == "pardiso"
+        else SuperLUFactor(A, symmetric=not many_factorizations)
+    )
 
 
 class SchurFactor:
@@ -103,7 +109,9 @@ class SchurFactor:
 
     name = "scipy"
 
-    def __init__(self, K: sp.spmatrix, last: NDArray[np.int64], points: NDArray[np.float64]) -> None:
+    def __init__(
+        self, K: sp.spmatrix, last: NDArray[np.int64], points: NDArray[np.float64]
+    ) -> None:
         import time
 
         from .ordering import nested_dissection
@@ -131,20 +139,24 @@ class SchurFactor:
         Kp = K[perm][:, perm].tocsc()
         self.timings["ordering"] = time.perf_counter() - tick
         tick = time.perf_counter()
-        self.lu = spla.splu(Kp, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                            options={"SymmetricMode": True})
+        self.lu = spla.splu(
+            Kp, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True}
+        )
         self.timings["factorization"] = time.perf_counter() - tick
         tick = time.perf_counter()
         c = len(last)
         tail = np.arange(n - c, n)
-        if not (np.array_equal(self.lu.perm_c[n - c:], tail) and np.array_equal(self.lu.perm_r[n - c:], tail)):
+        if not (
+            np.array_equal(self.lu.perm_c[n - c :], tail)
+            and np.array_equal(self.lu.perm_r[n - c :], tail)
+        ):
             # SuperLU moved the trailing dofs: fall back to solves for the block of K^{-1}
             E = np.zeros((n, c))
             E[tail, np.arange(c)] = 1.0
             self.S_inv = self.lu.solve(E)[tail]
         else:
             # SPD without pivoting: U = D L^T, so S = L22 U22 = U22^T D22^{-1} U22
-            U22 = self.lu.U[:, n - c:][n - c:].toarray()
+            U22 = self.lu.U[:, n - c :][n - c :].toarray()
             S = U22.T @ (U22 / np.diag(U22)[:, None])
             S = 0.5 * (S + S.T)
             import scipy.linalg as sla

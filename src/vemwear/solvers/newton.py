@@ -19,9 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 import scipy.linalg as sla
-import scipy.sparse.linalg as spla
+import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .linalg import SchurFactor, factorize
@@ -122,16 +121,22 @@ class CondensedNewton:
         f = s.N.T @ (s.omega * (pa + lam)) + s.Tau.T @ (s.omega * step.fric * pa)
         return uF - self.factor.solve(f)
 
-    def recover_many(self, steps: list[StepData], lams: list[NDArray], ps: list[NDArray]) -> NDArray:
+    def recover_many(
+        self, steps: list[StepData], lams: list[NDArray], ps: list[NDArray]
+    ) -> NDArray:
         """Full displacements of several levels with one block solve, shape (nf, len(steps))."""
         s = self.system
-        rhs = np.column_stack([
-            st.F - s.N.T @ (s.omega * (pa + lam)) - s.Tau.T @ (s.omega * st.fric * pa)
-            for st, lam, pa in zip(steps, lams, ps, strict=True)
-        ])
+        rhs = np.column_stack(
+            [
+                st.F - s.N.T @ (s.omega * (pa + lam)) - s.Tau.T @ (s.omega * st.fric * pa)
+                for st, lam, pa in zip(steps, lams, ps, strict=True)
+            ]
+        )
         return self.factor.solve(rhs)
 
-    def solve(self, step: StepData, guess: StepSolution | None = None, recover: bool = True) -> StepSolution:
+    def solve(
+        self, step: StepData, guess: StepSolution | None = None, recover: bool = True
+    ) -> StepSolution:
         """Solve one step problem on the contact unknowns (y = N u, lam).
 
         With ``recover=False`` the full displacement is not computed (``u`` is None);
@@ -187,7 +192,9 @@ def _condensed_residuals(s: ContactSystem, y, lam, R) -> dict[str, float]:
     return {
         "equilibrium": float(np.abs(R).max(initial=0) / g_ref),
         "feasibility": float(max(0.0, (y - s.g).max(initial=0)) / g_ref),
-        "complementarity": float(np.abs(np.minimum(lam / lam_ref, (s.g - y) / g_ref)).max(initial=0)),
+        "complementarity": float(
+            np.abs(np.minimum(lam / lam_ref, (s.g - y) / g_ref)).max(initial=0)
+        ),
     }
 
 
@@ -200,7 +207,9 @@ class FullNewton:
         self.system = system
         self.options = options or NewtonOptions()
 
-    def solve(self, step: StepData, guess: StepSolution | None = None, recover: bool = True) -> StepSolution:
+    def solve(
+        self, step: StepData, guess: StepSolution | None = None, recover: bool = True
+    ) -> StepSolution:
         s, opt = self.system, self.options
         if guess is not None and guess.u is not None:
             u, lam = np.array(guess.u, copy=True), np.array(guess.lam, copy=True)
@@ -208,7 +217,8 @@ class FullNewton:
             u, lam = np.zeros(s.n_free), np.zeros(s.m)
         N, Tau, om = s.N, s.Tau, s.omega
         it = 0
-        for it in range(1, opt.max_iter + 1):
+        while it < opt.max_iter:
+            it += 1
             y = N @ u
             pa, dp = s.p(y - step.w), s.p.derivative(y - step.w)
             active = lam + s.c_ncp * (y - s.g) > 0
@@ -224,10 +234,11 @@ class FullNewton:
             sol = factorize(M, opt.backend, many_factorizations=True).solve(rhs)
             du = sol[: s.n_free]
             lam_new = np.zeros(s.m)
-            lam_new[active] = sol[s.n_free:]
+            lam_new[active] = sol[s.n_free :]
             u, lam = u + du, lam_new
-            if np.abs(du).max() <= 1e-14 * max(np.abs(u).max(), float(np.abs(s.g).max())) and \
-                    np.array_equal(active, lam + s.c_ncp * (N @ u - s.g) > 0):
+            if np.abs(du).max() <= 1e-14 * max(
+                np.abs(u).max(), float(np.abs(s.g).max())
+            ) and np.array_equal(active, lam + s.c_ncp * (N @ u - s.g) > 0):
                 break
         lam = np.maximum(lam, 0.0)
         res = kkt_residuals(s, step, u, lam)

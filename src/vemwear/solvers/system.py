@@ -118,7 +118,9 @@ def kkt_residuals(
     Ku = system.K @ u
     r = Ku - step.F + force
     tiny = np.finfo(float).tiny
-    fscale = max(np.abs(step.F).max(initial=0), np.abs(Ku).max(initial=0), np.abs(force).max(initial=0), tiny)
+    fscale = max(
+        np.abs(step.F).max(initial=0), np.abs(Ku).max(initial=0), np.abs(force).max(initial=0), tiny
+    )
     g_ref = max(float(np.abs(system.g).max()), tiny)
     lam_ref = max(float(np.abs(lam).max(initial=0)), float(np.abs(pa).max(initial=0)), tiny)
     ncp = np.minimum(lam / lam_ref, (system.g - y) / g_ref)

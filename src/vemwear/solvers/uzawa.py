@@ -69,7 +69,9 @@ class Uzawa:
             val = val_new
         return 1.05 * val  # a margin: the estimate approaches from below
 
-    def solve(self, step: StepData, guess: StepSolution | None = None, recover: bool = True) -> StepSolution:
+    def solve(
+        self, step: StepData, guess: StepSolution | None = None, recover: bool = True
+    ) -> StepSolution:
         s, opt = self.system, self.options
         om = s.omega
         if guess is not None:
@@ -80,7 +82,9 @@ class Uzawa:
         res: dict[str, float] = {}
         it = 0
         for it in range(1, opt.max_iter + 1):
-            u = self.factor.solve(step.F - s.N.T @ (om * (q + lam)) - s.Tau.T @ (om * step.fric * q))
+            u = self.factor.solve(
+                step.F - s.N.T @ (om * (q + lam)) - s.Tau.T @ (om * step.fric * q)
+            )
             y = s.N @ u
             if it % opt.check_every == 0:
                 res = kkt_residuals(s, step, u, lam)

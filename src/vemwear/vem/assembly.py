@@ -6,17 +6,16 @@ Global dof ``2 v + c`` is component ``c`` of the displacement at vertex ``v``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Union
 
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polymesh import Mesh
-from .local import Material, element_matrices, geometry, strain_operator
+from .local import Material, element_matrices, geometry
 
 #: A vector field given as a constant 2-vector or a callable ``f(x, t)`` on (m, 2) points.
-Field = Union[ArrayLike, Callable[[NDArray[np.float64], float], ArrayLike]]
+Field = ArrayLike | Callable[[NDArray[np.float64], float], ArrayLike]
 
 
 def _dofs(verts: NDArray[np.int64]) -> NDArray[np.int64]:

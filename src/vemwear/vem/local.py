@@ -102,13 +102,14 @@ def projection_matrix(X: NDArray, xbar: NDArray, area: NDArray, q: NDArray) -> N
     the second moments ``S_ab = sum_i d_ia d_ib``. Shape (m, 2n, 2n), built from outer
     products per component pair.
     """
-    m, n, _ = X.shape
+    _m, n, _ = X.shape
     d = X - xbar[:, None, :]
     dx, dy = d[..., 0], d[..., 1]  # (m, n)
     qx, qy = q[..., 0] / area[:, None], q[..., 1] / area[:, None]
     Sxx, Syy, Sxy = (np.sum(a * b, axis=1)[:, None] for a, b in ((dx, dx), (dy, dy), (dx, dy)))
     Sdd = Sxx + Syy
-    # strain of the unit dofs: (i, x) -> exx = qx_i, exy = qy_i / 2; (i, y) -> eyy = qy_i, exy = qx_i / 2
+    # strain of the unit dofs: (i, x) -> exx = qx_i, exy = qy_i / 2;
+    #                          (i, y) -> eyy = qy_i, exy = qx_i / 2
     # rotation of the unit dofs from (3.10)
     om_x = (-dy - (0.5 * qy * (Sxx - Syy) - qx * Sxy)) / Sdd  # (m, n) over i
     om_y = (dx - (0.5 * qx * (Sxx - Syy) + qy * Sxy)) / Sdd
@@ -128,8 +129,12 @@ def consistency_matrix(area: NDArray, q: NDArray, material: Material) -> NDArray
     o = lambda a, b: a[:, :, None] * b[:, None, :] / area[:, None, None]  # noqa: E731
     XX, YY, XY = o(qx, qx), o(qy, qy), o(qx, qy)
     YX = XY.transpose(0, 2, 1)
-    return _interleave((lam + 2 * eta) * XX + eta * YY, lam * XY + eta * YX,
-                       lam * YX + eta * XY, (lam + 2 * eta) * YY + eta * XX)
+    return _interleave(
+        (lam + 2 * eta) * XX + eta * YY,
+        lam * XY + eta * YX,
+        lam * YX + eta * XY,
+        (lam + 2 * eta) * YY + eta * XX,
+    )
 
 
 def element_matrices(
