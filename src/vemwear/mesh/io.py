@@ -8,6 +8,8 @@ boundary lines by physical groups called ``clamped``, ``traction`` and ``contact
 
 from __future__ import annotations
 
+import contextlib
+import io
 from pathlib import Path
 
 import meshio
@@ -40,6 +42,8 @@ def to_meshio(mesh: Mesh, with_boundary: bool = True) -> meshio.Mesh:
 def from_meshio(m: meshio.Mesh, source: str = "mesh") -> Mesh:
     """Build a :class:`Mesh` from a meshio mesh; 2D cells are reordered by cell id if present."""
     pts = np.asarray(m.points, dtype=float)
+    if pts.ndim != 2 or len(pts) == 0:
+        raise MeshError(f"{source}: no points found")
     if pts.shape[1] > 2:
         if np.any(np.abs(pts[:, 2:]) > 1e-12 * max(1.0, np.abs(pts).max())):
             raise MeshError(f"{source}: points are not in the plane z = 0")
@@ -119,9 +123,11 @@ def read_mesh(path: str | Path) -> Mesh:
     if not path.exists():
         raise FileNotFoundError(f"mesh file not found: {path}")
     try:
-        m = meshio.read(path)
-    except Exception as exc:  # meshio raises many kinds; report them as one
-        raise MeshError(f"{path}: cannot read mesh ({exc})") from exc
+        # some meshio readers print to stdout, and some call sys.exit on bad files
+        with contextlib.redirect_stdout(io.StringIO()):
+            m = meshio.read(path)
+    except (Exception, SystemExit) as exc:  # meshio raises many kinds; report them as one
+        raise MeshError(f"{path}: cannot read mesh ({exc or type(exc).__name__})") from None
     return from_meshio(m, source=str(path))
 
 
