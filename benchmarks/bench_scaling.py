@@ -128,8 +128,10 @@ def _assembly() -> dict:
     t = time.perf_counter()
     vor = rectangle_voronoi((2.0, 1.0), 100_000, seed=0, lloyd_iterations=0)
     out["voronoi_mesh_s"] = time.perf_counter() - t
-    for name, mesh in (("squares_131k", rectangle_squares((2.0, 1.0), (512, 256))),
-                       ("voronoi_100k", vor)):
+    for name, mesh in (
+        ("squares_131k", rectangle_squares((2.0, 1.0), (512, 256))),
+        ("voronoi_100k", vor),
+    ):
         best = float("inf")
         for _ in range(3):
             t = time.perf_counter()
@@ -180,8 +182,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--backend", default="auto")
     ap.add_argument("--example-5-2", action="store_true", help="Example 5.2: Newton against Uzawa")
-    ap.add_argument("--assembly", action="store_true",
-                    help="stiffness assembly of 131k squares and 100k Voronoi cells")
+    ap.add_argument(
+        "--assembly",
+        action="store_true",
+        help="stiffness assembly of 131k squares and 100k Voronoi cells",
+    )
     ap.add_argument("--json", help="also write the rows to this JSON file")
     ap.add_argument("--child", nargs="*", help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
@@ -200,7 +205,9 @@ def main(argv: list[str] | None = None) -> int:
         print("\nstiffness assembly (best of 3)")
         for name in ("squares_131k", "voronoi_100k"):
             r = out[name]
-            print(f"{name:14s} {r['cells']:7d} cells {r['unknowns']:7d} unknowns {r['assembly_s']:6.3f} s")
+            print(
+                f"{name:14s} {r['cells']:7d} cells {r['unknowns']:7d} unknowns {r['assembly_s']:6.3f} s"
+            )
         rows = [out]
     elif a.example_5_2:
         out = _run_child(["ex52"])

@@ -107,25 +107,43 @@ def test_check_invalid_is_exit_2_without_traceback(
 
 
 def test_check_subprocess(small: Path) -> None:
-    ok = subprocess.run([sys.executable, "-m", "vemwear.cli.main", "check", str(small)],
-                        capture_output=True, text=True, timeout=120)
+    ok = subprocess.run(
+        [sys.executable, "-m", "vemwear.cli.main", "check", str(small)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert ok.returncode == 0, ok.stderr
     small.write_text(SMALL.replace("kappa = 2.0", "kapa = 2.0"))
-    bad = subprocess.run([sys.executable, "-m", "vemwear.cli.main", "check", str(small)],
-                         capture_output=True, text=True, timeout=120)
+    bad = subprocess.run(
+        [sys.executable, "-m", "vemwear.cli.main", "check", str(small)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert bad.returncode == 2
-    assert bad.stderr.strip() == (f"vemwear: error: {small}: [contact] unknown key 'kapa'; "
-                                  "did you mean 'kappa'?")
+    assert bad.stderr.strip() == (
+        f"vemwear: error: {small}: [contact] unknown key 'kapa'; did you mean 'kappa'?"
+    )
 
 
 # ---------------------------------------------------------------------------- run
-def test_run_writes_everything(small: Path, tmp_path: Path,
-                               capsys: pytest.CaptureFixture[str]) -> None:
+def test_run_writes_everything(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     out = tmp_path / "out"
     assert main(["run", str(small), "-o", str(out), "--no-progress"]) == 0
     names = {p.name for p in out.iterdir()}
-    assert {"result.npz", "summary.json", "contact_profiles.png", "displacement.png",
-            "deformed.png", "time_history.png", "solution.pvd", "solution"} <= names
+    assert {
+        "result.npz",
+        "summary.json",
+        "contact_profiles.png",
+        "displacement.png",
+        "deformed.png",
+        "time_history.png",
+        "solution.pvd",
+        "solution",
+    } <= names
     assert len(list((out / "solution").glob("*.vtu"))) == 9
     summary = json.loads((out / "summary.json").read_text())
     extra = summary["inputs"]["extra"]
@@ -145,8 +163,9 @@ def test_run_refuses_existing_outdir_and_force_replaces(
     out = tmp_path / "out"
     out.mkdir()
     (out / "old.txt").write_text("keep me")
-    small.write_text(SMALL.replace("figures = true", "figures = false")
-                     .replace("vtk = true", "vtk = false"))
+    small.write_text(
+        SMALL.replace("figures = true", "figures = false").replace("vtk = true", "vtk = false")
+    )
     assert main(["run", str(small), "-o", str(out), "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "exists and is not empty; use --force" in err
@@ -184,16 +203,20 @@ def test_non_convergence_with_force_keeps_old_output(small: Path, tmp_path: Path
 
 
 def test_solver_override(small: Path, tmp_path: Path) -> None:
-    small.write_text(SMALL.replace('method = "newton"', 'method = "newton-full"\nmax_iter = 1')
-                     .replace("figures = true", "figures = false").replace("vtk = true",
-                                                                           "vtk = false"))
+    small.write_text(
+        SMALL.replace('method = "newton"', 'method = "newton-full"\nmax_iter = 1')
+        .replace("figures = true", "figures = false")
+        .replace("vtk = true", "vtk = false")
+    )
     out = tmp_path / "out"  # the configuration's solver would fail; --solver newton does not
     assert main(["run", str(small), "-o", str(out), "--no-progress", "--solver", "newton"]) == 0
     assert json.loads((out / "summary.json").read_text())["solver"]["method"] == "newton"
 
 
 def test_interrupt_is_130_and_internal_error_is_1(
-    small: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    small: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     import vemwear.simulate as sim
@@ -219,8 +242,9 @@ def test_interrupt_is_130_and_internal_error_is_1(
     assert not out.exists() and leftovers(tmp_path) == []
 
 
-def test_outdir_must_not_hold_the_config(small: Path, tmp_path: Path,
-                                         capsys: pytest.CaptureFixture[str]) -> None:
+def test_outdir_must_not_hold_the_config(
+    small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert main(["run", str(small), "-o", str(tmp_path), "--force", "--no-progress"]) == 2
     assert "contains" in capsys.readouterr().err
     assert small.exists()
@@ -264,11 +288,20 @@ def test_example_registry() -> None:
 
 
 def test_example_52_small(tmp_path: Path) -> None:
-    run = ex52.run(tmp_path, divisions=(8, 4), steps=8, vtk=False,
-                   solver=SolverOptions(backend="scipy"))
+    run = ex52.run(
+        tmp_path, divisions=(8, 4), steps=8, vtk=False, solver=SolverOptions(backend="scipy")
+    )
     names = {p.name for p in tmp_path.iterdir()}
-    assert {"set1", "set2", "set3", "fig3.png", "fig4.png", "fig5.png",
-            "wear_T_comparison.png", "example_5_2.md"} <= names
+    assert {
+        "set1",
+        "set2",
+        "set3",
+        "fig3.png",
+        "fig4.png",
+        "fig5.png",
+        "wear_T_comparison.png",
+        "example_5_2.md",
+    } <= names
     for s in ("set1", "set2", "set3"):
         assert (tmp_path / s / "result.npz").exists()
         assert (tmp_path / s / "contact_profiles.png").exists()
@@ -281,14 +314,22 @@ def test_example_52_small(tmp_path: Path) -> None:
         ex52.run(tmp_path / "x", steps=6)
 
 
-def test_example_cli(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                     capsys: pytest.CaptureFixture[str]) -> None:
+def test_example_cli(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     original = ex52.run
 
     def small_run(outdir: Path, *, solver: SolverOptions, **kw: object) -> object:
         assert solver.method == "uzawa"
-        return original(outdir, solver=SolverOptions(method="uzawa", backend="scipy"),
-                        divisions=(4, 2), steps=4, figures=False, vtk=False, **kw)
+        return original(
+            outdir,
+            solver=SolverOptions(method="uzawa", backend="scipy"),
+            divisions=(4, 2),
+            steps=4,
+            figures=False,
+            vtk=False,
+            **kw,
+        )
 
     monkeypatch.setattr(ex52, "run", small_run)
     out = tmp_path / "ex"

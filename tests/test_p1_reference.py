@@ -114,8 +114,11 @@ def test_edge_load_equals_p1_facet_load(tri_mesh):
     """Traction linear in x on the top side: vemwear's edge quadrature against skfem's
     facet assembly (both exact for linear f2 times linear v)."""
     sm, _basis, perm = skfem_setup(tri_mesh)
-    fb = FacetBasis(sm, ElementVector(ElementTriP1()),
-                    facets=sm.facets_satisfying(lambda x: np.isclose(x[1], 1.0)))
+    fb = FacetBasis(
+        sm,
+        ElementVector(ElementTriP1()),
+        facets=sm.facets_satisfying(lambda x: np.isclose(x[1], 1.0)),
+    )
 
     @LinearForm
     def top(v, w):
@@ -244,8 +247,15 @@ class P1Reference:
             W[n] = w
             if n + 1 < L:  # left rectangle rule (3.22), alpha(t_n) = kappa |v*(t_n)|
                 w = w + (t[n + 1] - t[n]) * KAPPA * np.linalg.norm(vs) * P_[n]
-        return {"u": U, "wear": W, "u_nu": Y, "lam": LAM_, "p": P_, "states": ST,
-                "nodes": self.nodes}
+        return {
+            "u": U,
+            "wear": W,
+            "u_nu": Y,
+            "lam": LAM_,
+            "p": P_,
+            "states": ST,
+            "nodes": self.nodes,
+        }
 
 
 def v_star_paper(t):

@@ -89,10 +89,20 @@ def test_save_and_load_arrays(run: Result, tmp_path: Path) -> None:
     data = load_result(paths[0])
     L, n, m = len(run.t), run.problem.mesh.n_points, len(run.contact_nodes)
     shapes = {
-        "t": (L,), "points": (n, 2), "u": (L, n, 2), "contact_nodes": (m,),
-        "contact_s": (m,), "contact_points": (m, 2), "wear": (L, m), "u_nu": (L, m),
-        "penetration": (L, m), "lam": (L, m), "p": (L, m), "iterations": (L,),
-        "residuals": (L, 3), "cells_offsets": (run.problem.mesh.n_cells + 1,),
+        "t": (L,),
+        "points": (n, 2),
+        "u": (L, n, 2),
+        "contact_nodes": (m,),
+        "contact_s": (m,),
+        "contact_points": (m, 2),
+        "wear": (L, m),
+        "u_nu": (L, m),
+        "penetration": (L, m),
+        "lam": (L, m),
+        "p": (L, m),
+        "iterations": (L,),
+        "residuals": (L, 3),
+        "cells_offsets": (run.problem.mesh.n_cells + 1,),
     }
     for key, shape in shapes.items():
         assert data[key].shape == shape, key
@@ -188,7 +198,9 @@ def test_profile_lines_and_titles(run: Result) -> None:
     np.testing.assert_allclose(axes[0].get_lines()[-1].get_ydata(), run.wear[-1])
     np.testing.assert_allclose(axes[1].get_lines()[0].get_ydata(), run.penetration[run.level(0.25)])
     assert [t.get_text() for t in axes[0].get_legend().get_texts()] == [
-        "$t$ = 0.25", "$t$ = 0.5", "$t$ = 1",
+        "$t$ = 0.25",
+        "$t$ = 0.5",
+        "$t$ = 1",
     ]
     title = fig.get_suptitle()
     assert "0.2" in title and "kappa" in title
@@ -288,6 +300,8 @@ def test_cell_strain_stress_linear_field() -> None:
     np.testing.assert_allclose(stress[:, :2, :2], np.broadcast_to(S, shape), atol=1e-13)
     np.testing.assert_allclose(stress[:, 2, 2], mat.lam * tr)
     szz = mat.lam * tr
-    vm_ref = np.sqrt(0.5 * ((S[0, 0] - S[1, 1]) ** 2 + (S[1, 1] - szz) ** 2 + (szz - S[0, 0]) ** 2)
-                     + 3 * S[0, 1] ** 2)
+    vm_ref = np.sqrt(
+        0.5 * ((S[0, 0] - S[1, 1]) ** 2 + (S[1, 1] - szz) ** 2 + (szz - S[0, 0]) ** 2)
+        + 3 * S[0, 1] ** 2
+    )
     np.testing.assert_allclose(vm, vm_ref)

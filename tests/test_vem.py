@@ -43,14 +43,16 @@ def moments(X):
     x, y = X[:, 0], X[:, 1]
     xn, yn = np.roll(x, -1), np.roll(y, -1)
     c = x * yn - xn * y
-    return np.array([
-        c.sum() / 2,
-        np.sum(c * (x + xn)) / 6,
-        np.sum(c * (y + yn)) / 6,
-        np.sum(c * (x * x + x * xn + xn * xn)) / 12,
-        np.sum(c * (x * yn + 2 * x * y + 2 * xn * yn + xn * y)) / 24,
-        np.sum(c * (y * y + y * yn + yn * yn)) / 12,
-    ])
+    return np.array(
+        [
+            c.sum() / 2,
+            np.sum(c * (x + xn)) / 6,
+            np.sum(c * (y + yn)) / 6,
+            np.sum(c * (x * x + x * xn + xn * xn)) / 12,
+            np.sum(c * (x * yn + 2 * x * y + 2 * xn * yn + xn * y)) / 24,
+            np.sum(c * (y * y + y * yn + yn * yn)) / 12,
+        ]
+    )
 
 
 def centroid(X):
@@ -191,8 +193,16 @@ def perturbed_polygon_mesh(n=6, seed=1):
         while i < n:
             r = rng.uniform()
             if r < 0.35 and i + 1 < n:
-                cells.append([nid(i, j), nid(i + 1, j), nid(i + 2, j),
-                              nid(i + 2, j + 1), nid(i + 1, j + 1), nid(i, j + 1)])
+                cells.append(
+                    [
+                        nid(i, j),
+                        nid(i + 1, j),
+                        nid(i + 2, j),
+                        nid(i + 2, j + 1),
+                        nid(i + 1, j + 1),
+                        nid(i, j + 1),
+                    ]
+                )
                 i += 2
                 continue
             a, b, c, d = nid(i, j), nid(i + 1, j), nid(i + 1, j + 1), nid(i, j + 1)
@@ -215,7 +225,10 @@ def l_shaped_mesh(blocks=3, seed=2):
     # counter-clockwise boundary of the 2x2 block (local lattice coordinates)
     ring = [(0, 0), (1, 0), (2, 0), (2, 1), (2, 2), (1, 2), (0, 2), (0, 1)]
     corner_sq = {  # the separate square at each corner, and the ring index of that corner
-        (1, 1): 4, (0, 1): 6, (0, 0): 0, (1, 0): 2,
+        (1, 1): 4,
+        (0, 1): 6,
+        (0, 0): 0,
+        (1, 0): 2,
     }
     cells = []
     for bj in range(blocks):
@@ -401,8 +414,12 @@ def test_projection_definition_and_consistency(kind):
                 assert np.allclose(0.5 * (G + G.T), E, rtol=0, atol=tol * np.abs(V).max() / h)
                 assert np.allclose(PV.mean(axis=0), V.mean(axis=0), rtol=0, atol=tol)  # (3.9)
                 d = x - x.mean(axis=0)
-                assert np.isclose(cross2(d, PV).sum(), cross2(d, V).sum(),  # (3.10)
-                                  rtol=0, atol=tol * h * n)
+                assert np.isclose(
+                    cross2(d, PV).sum(),
+                    cross2(d, V).sum(),  # (3.10)
+                    rtol=0,
+                    atol=tol * h * n,
+                )
                 # consistency (3.6): a_h(v, q) = |K| eps(Pi v) : C eps(q), any stabilization
                 eq = 0.5 * (A + A.T)
                 lhs = v @ k @ q
@@ -411,8 +428,9 @@ def test_projection_definition_and_consistency(kind):
                 assert abs(lhs - rhs) <= 1e-12 * c * scale
                 # and the energy of a linear field is exact: a_h(q, q) = |K| C eps(q) : eps(q);
                 # vemwear's areas (shoelace in absolute coordinates) add an eps c^2 error
-                assert np.isclose(q @ k @ q, area * energy(eq, eq, MAT_B),
-                                  rtol=1e-12 * c + 2e-13 * c**2, atol=0)
+                assert np.isclose(
+                    q @ k @ q, area * energy(eq, eq, MAT_B), rtol=1e-12 * c + 2e-13 * c**2, atol=0
+                )
 
 
 # ----------------------------------------------------------------------------- 3. patch tests
@@ -490,9 +508,7 @@ def test_patch_test_mixed_traction(poly_mesh, stab):
         nrm, on = SIDES[side]
         F_sides += edge_load_vector(mesh, be[on(mid)], S @ nrm)
     # ... and on the tagged traction part, with f2(x, t) = sigma n(x)
-    tagged = tag_rectangle(
-        mesh, {"clamped": "left", "traction": ["right", "bottom", "top"]}
-    )
+    tagged = tag_rectangle(mesh, {"clamped": "left", "traction": ["right", "bottom", "top"]})
     F = traction_vector(tagged, lambda x, t: outward_normal_at(x) @ S.T)
     assert np.allclose(F, F_sides, rtol=0, atol=1e-14 * np.abs(F).max())
     # global equilibrium of the load: total force and moment of sigma n over the boundary
@@ -550,8 +566,9 @@ def test_body_force_vector(poly_mesh):
     Fc = body_force_vector(mesh, (0.3, -0.06))
     assert np.allclose(Fc.reshape(-1, 2).sum(axis=0), [0.3, -0.06], rtol=1e-13)
     v = np.random.default_rng(5).normal(size=(mesh.n_points, 2))
-    direct = sum(shoelace(mesh.points[c]) * (np.array([0.3, -0.06]) @ v[c].mean(axis=0))
-                 for c in mesh.cells)
+    direct = sum(
+        shoelace(mesh.points[c]) * (np.array([0.3, -0.06]) @ v[c].mean(axis=0)) for c in mesh.cells
+    )
     assert np.isclose(v.ravel() @ Fc, direct, rtol=1e-13)
 
 

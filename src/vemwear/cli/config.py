@@ -17,20 +17,33 @@ import difflib
 import inspect
 import io
 import math
+import re
 import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import meshio
 import numpy as np
+from numpy.typing import NDArray
 
-from ..contact import ComplianceLaw, LinearCompliance, TableCompliance
-from ..mesh import Mesh, read_mesh, segment_predicate, side_predicate
+from ..contact import (
+    ComplianceLaw,
+    LinearCompliance,
+    TableCompliance,
+    contact_boundary,
+    nodal_values,
+)
+from ..mesh import Mesh, MeshError, segment_predicate, side_predicate
 from ..mesh.boundary import SIDES
+from ..mesh.checks import check_cells, check_conforming, check_vertices
+from ..mesh.io import from_meshio
+from ..mesh.polymesh import PARTS, part_code
 from ..simulate import Problem, SolverOptions, TimeGrid
 from ..solvers import BACKENDS, SOLVERS, resolve_backend
-from ..vem import STABILIZATIONS, Material
+from ..vem import STABILIZATIONS, Material, body_force_vector, traction_vector
+from .expr import Expression, ExpressionError, parse_expression
 
 __all__ = [
     "Config",
@@ -40,6 +53,7 @@ __all__ = [
     "load_config",
     "mesh_families",
     "parse_config",
+    "smallness_report",
 ]
 
 
@@ -104,15 +118,19 @@ _SECTIONS: dict[str, tuple[tuple[str, ...], bool]] = {
     "vem": (("stabilization",), False),
     "loads": (("f1", "f2"), False),
     "contact": (("p", "g", "mu", "kappa", "v_star"), True),
-    "time": (("T", "steps", "dt", "pattern"), True),
+    "time": (("T", "steps", "dt", "pattern", "levels"), True),
     "solver": (("method", "tol", "max_iter", "backend"), False),
     "output": (("times", "figures", "vtk"), False),
 }
 _TOP_SCALARS = ("title",)
 _GRID_KEYS = ("size", "origin", "divisions")
 _TOML_TYPE = {
-    str: "a string", int: "an integer", float: "a float", bool: "a boolean",
-    list: "an array", dict: "a table",
+    str: "a string",
+    int: "an integer",
+    float: "a float",
+    bool: "a boolean",
+    list: "an array",
+    dict: "a table",
 }
 
 
@@ -144,7 +162,10 @@ class _Checker:
         return v
 
     def keys(
-        self, tbl: Mapping[str, Any], allowed: Sequence[str], where: str,
+        self,
+        tbl: Mapping[str, Any],
+        allowed: Sequence[str],
+        where: str,
         required: Sequence[str] = (),
     ) -> None:
         for k in tbl:
@@ -155,10 +176,11 @@ class _Checker:
                 raise self.fail(where, f"missing required key {k!r}")
 
     # -- scalars
-    def number(self, v: Any, where: str, *, gt: float | None = None,
-               ge: float | None = None) -> float:
+    def number(
+        self, v: Any, where: str, *, gt: float | None = None, ge: float | None = None
+    ) -> float:
         if isinstance(v, bool) or not isinstance(v, int | float):
-            raise self.fail(where, f"must be a number, got {_kind(v)} ({_show(v)})")
+            raise self.fail(where, f"must be a number, got {_kind(v)} ({_show(v)}){_unit_hint(v)}")
         x = float(v)
         if not math.isfinite(x):
             raise self.fail(where, f"must be a finite number, got {v}")
@@ -203,17 +225,40 @@ class _Checker:
             raise self.fail(where, f"must be an array of 2 numbers [x, y], got {_show(v)}")
         return (self.number(v[0], f"{where}[0]"), self.number(v[1], f"{where}[1]"))
 
-    def numbers(self, v: Any, where: str, *, min_len: int = 1, gt: float | None = None,
-                ge: float | None = None, increasing: bool = False) -> list[float]:
+    def numbers(
+        self,
+        v: Any,
+        where: str,
+        *,
+        min_len: int = 1,
+        gt: float | None = None,
+        ge: float | None = None,
+        increasing: bool = False,
+    ) -> list[float]:
         arr = self.array(v, where, min_len=min_len)
         out = [self.number(x, f"{where}[{i}]", gt=gt, ge=ge) for i, x in enumerate(arr)]
         if increasing:
             for i in range(len(out) - 1):
                 if not out[i + 1] > out[i]:
                     raise self.fail(
-                        where, f"must increase strictly, but entry {i + 1} ({out[i + 1]:g}) "
-                        f"<= entry {i} ({out[i]:g})")
+                        where,
+                        f"must increase strictly, but entry {i + 1} ({out[i + 1]:g}) "
+                        f"<= entry {i} ({out[i]:g})",
+                    )
         return out
+
+
+_UNIT_RE = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*[A-Za-z%\u00b5]")
+
+
+def _unit_hint(v: Any) -> str:
+    """A hint for numbers written with a unit, e.g. ``"4 GPa"``."""
+    if isinstance(v, str) and _UNIT_RE.match(v):
+        return (
+            "; units are not accepted: write plain numbers in consistent units "
+            "(docs/config.md, 'Units')"
+        )
+    return ""
 
 
 def _suggest(word: str, valid: Sequence[str]) -> str:
@@ -263,15 +308,20 @@ def mesh_families() -> dict[str, Callable[..., Mesh]]:
     full: dict[str, Callable[..., Mesh]] = {}
     for n in list(getattr(mesh_pkg, "__all__", dir(mesh_pkg))):
         obj = getattr(mesh_pkg, n, None)
-        if (n.startswith("_") or n in _NOT_FAMILIES or not inspect.isfunction(obj)
-                or not _returns_mesh(obj) or not _takes_no_mesh(obj)):
+        if (
+            n.startswith("_")
+            or n in _NOT_FAMILIES
+            or not inspect.isfunction(obj)
+            or not _returns_mesh(obj)
+            or not _takes_no_mesh(obj)
+        ):
             continue
         full[n] = obj
         if n.endswith("_mesh") and n[: -len("_mesh")] not in short:
             short[n[: -len("_mesh")]] = obj
     for n, obj in full.items():
         if n.startswith("rectangle_"):
-            short[n[len("rectangle_"):]] = obj
+            short[n[len("rectangle_") :]] = obj
     fam = {**full, **short}
     for reg in ("GENERATORS", "FAMILIES"):
         table = getattr(mesh_pkg, reg, None)
@@ -288,14 +338,18 @@ def _family_names(fams: Mapping[str, Callable[..., Mesh]]) -> list[str]:
     return sorted(seen.values())
 
 
-def _generator_args(ck: _Checker, sec: dict[str, Any], fn: Callable[..., Mesh],
-                    gen: str) -> dict[str, Any]:
+def _generator_args(
+    ck: _Checker, sec: dict[str, Any], fn: Callable[..., Mesh], gen: str
+) -> dict[str, Any]:
     """Check the generator's parameters against its signature and convert arrays to tuples."""
     where = "[mesh]"
     try:
         sig = inspect.signature(fn)
-        params = [p for p in sig.parameters.values()
-                  if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+        params = [
+            p
+            for p in sig.parameters.values()
+            if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
+        ]
         has_var_kw = any(p.kind == p.VAR_KEYWORD for p in sig.parameters.values())
     except (TypeError, ValueError):  # pragma: no cover - builtins without signature
         params, has_var_kw = [], True
@@ -312,23 +366,32 @@ def _generator_args(ck: _Checker, sec: dict[str, Any], fn: Callable[..., Mesh],
             if not x > 0:
                 raise ck.fail(f"{where} size[{i}]", f"must be > 0, got {x:g}")
         x0, y0 = ck.vector(sec.get("origin", [0.0, 0.0]), f"{where} origin")
-        kwargs["domain"] = ((x0, y0), (x0 + size[0], y0), (x0 + size[0], y0 + size[1]),
-                            (x0, y0 + size[1]))
+        kwargs["domain"] = (
+            (x0, y0),
+            (x0 + size[0], y0),
+            (x0 + size[0], y0 + size[1]),
+            (x0, y0 + size[1]),
+        )
     for k, v in sec.items():
         if k in ("generator", "file") or (rect_domain and k in ("size", "origin")):
             continue
         if k == "return_seeds":
             raise ck.fail(where, f"unknown key {k!r} for generator {gen!r}")
         if k not in allowed and not has_var_kw:
-            raise ck.fail(where, f"unknown key {k!r} for generator {gen!r}"
-                          f"{_suggest(k, ['generator', *allowed])}")
+            raise ck.fail(
+                where,
+                f"unknown key {k!r} for generator {gen!r}{_suggest(k, ['generator', *allowed])}",
+            )
         if k in _GRID_KEYS and gen in ("squares", "triangles"):
             if k == "divisions":
                 if not isinstance(v, list) or len(v) != 2:
-                    raise ck.fail(f"{where} divisions",
-                                  f"must be an array of 2 integers [nx, ny], got {_show(v)}")
-                kwargs[k] = tuple(ck.integer(x, f"{where} divisions[{i}]", ge=1)
-                                  for i, x in enumerate(v))
+                    raise ck.fail(
+                        f"{where} divisions",
+                        f"must be an array of 2 integers [nx, ny], got {_show(v)}",
+                    )
+                kwargs[k] = tuple(
+                    ck.integer(x, f"{where} divisions[{i}]", ge=1) for i, x in enumerate(v)
+                )
             else:
                 vec = ck.vector(v, f"{where} {k}")
                 if k == "size":
@@ -355,8 +418,65 @@ def _to_python(ck: _Checker, v: Any, where: str) -> Any:
     return v
 
 
-def build_mesh(sec: Any, base_dir: Path, source: str = "config") -> tuple[Mesh, dict[str, Any]]:
+def _check_dangling(ck: _Checker, raw: meshio.Mesh, where: str) -> None:
+    """Vertices of a mesh file that no polygonal cell uses (the reader would drop them)."""
+    n = len(raw.points)
+    used = np.zeros(n, dtype=bool)
+    for block in raw.cells:
+        if block.type in ("triangle", "quad") or block.type.startswith("polygon"):
+            data = np.asarray(block.data, dtype=np.int64).ravel()
+            if data.size and (data.min() < 0 or data.max() >= n):
+                raise ck.fail(where, f"cells refer to vertex ids outside 0..{n - 1}")
+            used[data] = True
+    if used.any() and not used.all():
+        bad = np.flatnonzero(~used)
+        more = f" and {bad.size - 10} more" if bad.size > 10 else ""
+        raise ck.fail(
+            where,
+            f"vertices {bad[:10].tolist()}{more} belong to no cell "
+            "(dangling); remove them from the file",
+        )
+
+
+def _check_tag_conflicts(ck: _Checker, raw: meshio.Mesh, where: str) -> None:
+    """No edge of a mesh file is tagged with two different boundary parts."""
+    names = {int(v[0]): k for k, v in (raw.field_data or {}).items() if len(v)}
+    seen: dict[tuple[int, int], int] = {}
+    for bi, block in enumerate(raw.cells):
+        if block.type != "line":
+            continue
+        if "part" in raw.cell_data:
+            codes = np.asarray(raw.cell_data["part"][bi], dtype=np.int64)
+        elif "gmsh:physical" in raw.cell_data:
+            phys = np.asarray(raw.cell_data["gmsh:physical"][bi], dtype=np.int64)
+            codes = np.array(
+                [PARTS.index(names[p]) + 1 if names.get(p) in PARTS else 0 for p in phys.tolist()],
+                dtype=np.int64,
+            )
+        else:
+            continue
+        for (a, b), code in zip(np.asarray(block.data).tolist(), codes.tolist(), strict=False):
+            if code <= 0 or code > len(PARTS):
+                continue
+            key = (min(a, b), max(a, b))
+            old = seen.setdefault(key, code)
+            if old != code:
+                raise ck.fail(
+                    where,
+                    f"boundary edge ({a}, {b}) is tagged both "
+                    f"{PARTS[old - 1]!r} and {PARTS[code - 1]!r}; every boundary "
+                    "edge must belong to exactly one part",
+                )
+
+
+def build_mesh(
+    sec: Any, base_dir: Path, source: str = "config", *, file_tags: bool = True
+) -> tuple[Mesh, dict[str, Any]]:
     """The untagged (or file-tagged) mesh of a ``[mesh]`` section.
+
+    A mesh file is checked before it is used: dangling vertices (except in ``.msh``
+    files), duplicate vertices, bad cells and non-conforming edges are a
+    :class:`ConfigError` naming the file and the vertex, cell or edge ids.
 
     Parameters
     ----------
@@ -366,6 +486,9 @@ def build_mesh(sec: Any, base_dir: Path, source: str = "config") -> tuple[Mesh, 
         Directory that relative mesh file names refer to.
     source : str
         Name used in error messages (the config file).
+    file_tags : bool
+        The boundary parts of a mesh file are used (no ``[boundary]`` table): an edge
+        tagged with two different parts in the file is then an error.
 
     Returns
     -------
@@ -377,8 +500,10 @@ def build_mesh(sec: Any, base_dir: Path, source: str = "config") -> tuple[Mesh, 
     sec = ck.table(sec, "[mesh]")
     has_gen, has_file = "generator" in sec, "file" in sec
     if has_gen == has_file:
-        raise ck.fail("[mesh]", "needs exactly one of 'generator' or 'file'"
-                      + (", not both" if has_gen else ""))
+        raise ck.fail(
+            "[mesh]",
+            "needs exactly one of 'generator' or 'file'" + (", not both" if has_gen else ""),
+        )
     if has_file:
         ck.keys(sec, ("file",), "[mesh]")
         name = ck.string(sec["file"], "[mesh] file")
@@ -390,22 +515,41 @@ def build_mesh(sec: Any, base_dir: Path, source: str = "config") -> tuple[Mesh, 
         chatter = io.StringIO()  # meshio prints its reasons; keep them for the message
         try:
             with contextlib.redirect_stdout(chatter), contextlib.redirect_stderr(chatter):
-                mesh = read_mesh(path)
-        except (ValueError, OSError) as exc:
-            raise ck.fail("[mesh] file", f"{path} cannot be read: {exc}") from exc
+                raw = meshio.read(path)
         except SystemExit as exc:  # meshio calls sys.exit(1) on files it cannot parse
             why = " ".join(chatter.getvalue().split())
-            raise ck.fail("[mesh] file", f"{path} cannot be read: meshio could not parse it"
-                          + (f" ({why})" if why else "")) from exc
+            raise ck.fail(
+                "[mesh] file",
+                f"{path} cannot be read: meshio could not parse it" + (f" ({why})" if why else ""),
+            ) from exc
+        except Exception as exc:  # meshio raises many kinds of errors on broken files
+            raise ck.fail("[mesh] file", f"{path} cannot be read: {exc}") from exc
+        shown = f"[mesh] file {name!r}:"
+        if path.suffix.lower() != ".msh":  # gmsh files keep unused geometry points
+            _check_dangling(ck, raw, shown)
+        if file_tags:
+            _check_tag_conflicts(ck, raw, shown)
+        try:
+            mesh = from_meshio(raw, source=str(path))
+        except (ValueError, IndexError, TypeError) as exc:
+            raise ck.fail("[mesh] file", f"{path} cannot be read: {exc}") from exc
+        try:
+            check_vertices(mesh)
+            check_cells(mesh)
+            check_conforming(mesh)
+        except MeshError as exc:
+            raise ck.fail(shown, str(exc)) from None
         return mesh, {"file": str(path.resolve())}
     fams = mesh_families()
     gen = ck.string(sec["generator"], "[mesh] generator")
     if gen not in fams:
         close = difflib.get_close_matches(gen, list(fams), n=1, cutoff=0.6)
         hint = f"did you mean {close[0]!r}? " if close else ""
-        raise ck.fail("[mesh] generator",
-                      f"= {gen!r} is not a known mesh family; {hint}available: "
-                      f"{', '.join(_family_names(fams))}")
+        raise ck.fail(
+            "[mesh] generator",
+            f"= {gen!r} is not a known mesh family; {hint}available: "
+            f"{', '.join(_family_names(fams))}",
+        )
     fn = fams[gen]
     kwargs = _generator_args(ck, sec, fn, gen)
     try:
@@ -420,57 +564,99 @@ def build_mesh(sec: Any, base_dir: Path, source: str = "config") -> tuple[Mesh, 
 
 
 def _boundary(ck: _Checker, data: dict[str, Any], mesh: Mesh, from_file: bool) -> Mesh:
-    """Tag the boundary parts of ``mesh`` from the ``[boundary]`` section."""
+    """Tag the boundary parts of ``mesh`` from the ``[boundary]`` section.
+
+    Every part must select at least one edge and no edge may be selected by two
+    parts (the error names both parts and an edge); ``clamped`` and ``contact`` are
+    required. Edges in no part are reported by the mesh checks of the problem.
+    """
     if "boundary" not in data:
         if from_file:
             return mesh  # keep the file's tags
-        raise ck.fail("", "missing required section [boundary] (which sides are clamped, "
-                      "traction and contact)")
+        raise ck.fail(
+            "",
+            "missing required section [boundary] (which sides are clamped, traction and contact)",
+        )
     b = data["boundary"]
     if isinstance(b, str):
         if b != "file":
             raise ck.fail("boundary", f"must be a table or the string 'file', got {b!r}")
         if not from_file:
-            raise ck.fail("boundary", "= 'file' needs [mesh] file (generated meshes "
-                          "have no tags)")
+            raise ck.fail("boundary", "= 'file' needs [mesh] file (generated meshes have no tags)")
         return mesh
     b = ck.table(b, "[boundary]")
     allowed = _SECTIONS["boundary"][0]
-    ck.keys(b, allowed, "[boundary]")
-    preds: dict[str, Any] = {}
+    ck.keys(b, allowed, "[boundary]", required=("clamped", "contact"))
     rest = [name for name, v in b.items() if v == "rest"]
     if len(rest) > 1:
         raise ck.fail("[boundary]", f"only one part can be 'rest', got {', '.join(rest)}")
+    edges = mesh.boundary_edges
+    mid = mesh.edge_midpoints(edges)
+    hits: dict[str, NDArray[np.bool_]] = {}
     for name, spec in b.items():
         where = f"[boundary] {name}"
         if spec == "rest":
-            preds[name] = "rest"
             continue
         items = spec if isinstance(spec, list) else [spec]
         if not items:
             raise ck.fail(where, "must not be an empty array")
-        fs = []
+        hit = np.zeros(len(edges), dtype=bool)
         for i, it in enumerate(items):
             w = f"{where}[{i}]" if isinstance(spec, list) else where
             if isinstance(it, str):
                 if it == "rest":
                     raise ck.fail(w, "'rest' must stand alone, not inside an array")
                 ck.string(it, w, choices=(*SIDES, "rest"))
-                fs.append(side_predicate(mesh, it))
+                hit |= np.asarray(side_predicate(mesh, it)(mid), dtype=bool)
             elif isinstance(it, dict):
                 ck.keys(it, ("from", "to"), w, required=("from", "to"))
                 a = ck.vector(it["from"], f"{w}.from")
                 c = ck.vector(it["to"], f"{w}.to")
                 if a == c:
                     raise ck.fail(w, f"has coinciding end points {list(a)}")
-                fs.append(segment_predicate(a, c))
+                hit |= np.asarray(segment_predicate(a, c)(mid), dtype=bool)
             else:
                 raise ck.fail(
-                    w, "must be a side name ('left', 'right', 'bottom', 'top'), 'rest', "
+                    w,
+                    "must be a side name ('left', 'right', 'bottom', 'top'), 'rest', "
                     f"a segment {{ from = [x, y], to = [x, y] }} or an array of these, "
-                    f"got {_kind(it)} ({_show(it)})")
-        preds[name] = (lambda m, fs=fs: np.any([f(m) for f in fs], axis=0))
-    return mesh.with_boundary(preds)
+                    f"got {_kind(it)} ({_show(it)})",
+                )
+        if not hit.any():
+            lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
+            raise ck.fail(
+                where,
+                f"= {_show(spec)} selects no boundary edge (the mesh spans "
+                f"[{lo[0]:g}, {hi[0]:g}] x [{lo[1]:g}, {hi[1]:g}]; segments select "
+                "the boundary edges lying on them)",
+            )
+        for other, ohit in hits.items():
+            both = np.flatnonzero(hit & ohit)
+            if both.size:
+                e = both[0]
+                p0, p1 = mesh.points[edges[e, 0]], mesh.points[edges[e, 1]]
+                more = f" and {both.size - 1} more" if both.size > 1 else ""
+                raise ck.fail(
+                    "[boundary]",
+                    f"parts {other!r} and {name!r} overlap: both select the "
+                    f"boundary edge ({edges[e, 0]}, {edges[e, 1]}) from {_pt(p0)} to "
+                    f"{_pt(p1)}{more}; every boundary edge must belong to exactly one part",
+                )
+        hits[name] = hit
+    preds: dict[str, Any] = {name: (lambda m, h=h: h) for name, h in hits.items()}
+    preds.update({name: "rest" for name in rest})
+    tagged = mesh.with_boundary(preds)
+    for name in rest:
+        if not np.any(tagged.boundary_tags == part_code(name)):
+            raise ck.fail(
+                f"[boundary] {name}",
+                "= 'rest' selects no boundary edge (every edge is already in another part)",
+            )
+    return tagged
+
+
+def _pt(p: NDArray[np.float64]) -> str:
+    return f"({p[0]:.6g}, {p[1]:.6g})"
 
 
 # ---------------------------------------------------------------------------- contact
@@ -494,8 +680,73 @@ def _compliance(ck: _Checker, v: Any) -> ComplianceLaw:
         raise ck.fail(where, f"is not a valid compliance table: {exc}") from exc
 
 
-def _nodal(ck: _Checker, v: Any, name: str, *, gt: float | None = None,
-           ge: float | None = None) -> float | dict[str, Any]:
+class NodalExpression:
+    """``g``, ``mu`` or ``kappa`` given as an expression in ``x``, ``y``.
+
+    Called with the (m, 2) coordinates of the contact nodes; ``__name__`` is the
+    expression text (shown in ``summary.json``).
+    """
+
+    def __init__(self, expr: Expression) -> None:
+        self.expr = expr
+        self.__name__ = expr.text
+
+    def __call__(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+        P = np.asarray(points, dtype=float)
+        return self.expr(x=P[..., 0], y=P[..., 1])
+
+
+class FieldExpression:
+    """A load ``f1`` or ``f2`` whose components are numbers or expressions in ``x, y, t``.
+
+    Called as ``f(points, t)`` with (m, 2) points, it returns the (m, 2) values (the
+    callable form of :data:`vemwear.vem.assembly.Field`).
+    """
+
+    def __init__(self, parts: Sequence[Expression | float], text: str) -> None:
+        self.parts = tuple(parts)
+        self.__name__ = text
+        self.uses_t = any(isinstance(c, Expression) and "t" in c.names for c in self.parts)
+
+    def __call__(self, x: NDArray[np.float64], t: float) -> NDArray[np.float64]:
+        P = np.asarray(x, dtype=float).reshape(-1, 2)
+        cols = [
+            c(x=P[:, 0], y=P[:, 1], t=np.full(len(P), float(t)))
+            if isinstance(c, Expression)
+            else np.full(len(P), float(c))
+            for c in self.parts
+        ]
+        return np.column_stack(cols)
+
+
+class VelocityExpression:
+    """``v_star`` whose components are numbers or expressions in ``t``: ``v(t)`` -> 2-vector."""
+
+    def __init__(self, parts: Sequence[Expression | float], text: str) -> None:
+        self.parts = tuple(parts)
+        self.__name__ = text
+
+    def values(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
+        """(L, 2) values at the times ``t``."""
+        tt = np.atleast_1d(np.asarray(t, dtype=float))
+        return np.column_stack(
+            [c(t=tt) if isinstance(c, Expression) else np.full(tt.shape, c) for c in self.parts]
+        )
+
+    def __call__(self, t: float) -> NDArray[np.float64]:
+        return self.values(np.array([float(t)]))[0]
+
+
+def _expression(ck: _Checker, text: str, where: str, names: Sequence[str]) -> Expression:
+    try:
+        return parse_expression(text, names, where=where)
+    except ExpressionError as exc:
+        raise ConfigError(f"{ck.source}: {exc}") from None
+
+
+def _nodal(
+    ck: _Checker, v: Any, name: str, *, gt: float | None = None, ge: float | None = None
+) -> float | dict[str, Any] | NodalExpression:
     where = f"[contact] {name}"
     if isinstance(v, dict):
         ck.keys(v, ("along", "at", "values"), where, required=("at", "values"))
@@ -503,16 +754,62 @@ def _nodal(ck: _Checker, v: Any, name: str, *, gt: float | None = None,
         at = ck.numbers(v["at"], f"{where}.at", increasing=True)
         vals = ck.numbers(v["values"], f"{where}.values", gt=gt, ge=ge)
         if len(at) != len(vals):
-            raise ck.fail(f"{where}:", f"'at' and 'values' must have the same length, "
-                          f"got {len(at)} and {len(vals)}")
+            raise ck.fail(
+                f"{where}:",
+                f"'at' and 'values' must have the same length, got {len(at)} and {len(vals)}",
+            )
         return {"along": along, "at": at, "values": vals}
+    if isinstance(v, str):
+        e = _expression(ck, v, where, ("x", "y"))
+        if e.is_constant:  # check the sign now; others at the contact nodes
+            ck.number(float(e(x=0.0)), f"{where} = {v!r}:", gt=gt, ge=ge)
+        return NodalExpression(e)
     if isinstance(v, bool) or not isinstance(v, int | float):
-        raise ck.fail(where, "must be a number or a table { along, at, values }, "
-                      f"got {_kind(v)} ({_show(v)})")
+        raise ck.fail(
+            where,
+            "must be a number, an expression string in x, y or a table "
+            f"{{ along, at, values }}, got {_kind(v)} ({_show(v)})",
+        )
     return ck.number(v, where, gt=gt, ge=ge)
 
 
-def _velocity(ck: _Checker, v: Any) -> tuple[float, float] | dict[str, Any]:
+def _components(
+    ck: _Checker, v: Any, where: str, names: Sequence[str]
+) -> tuple[list[Expression | float], bool]:
+    """A 2-array of numbers or expression strings; returns the parts and whether any is a string."""
+    if not isinstance(v, list) or len(v) != 2:
+        raise ck.fail(
+            where,
+            "must be an array of 2 numbers [x, y] (or expression strings "
+            f"in {', '.join(names)}), got {_kind(v)} ({_show(v)})",
+        )
+    parts: list[Expression | float] = []
+    for i, c in enumerate(v):
+        if isinstance(c, str):
+            parts.append(_expression(ck, c, f"{where}[{i}]", names))
+        else:
+            if isinstance(c, bool) or not isinstance(c, int | float):
+                raise ck.fail(
+                    f"{where}[{i}]",
+                    "must be a number or an expression string in "
+                    f"{', '.join(names)}, got {_kind(c)} ({_show(c)})",
+                )
+            parts.append(ck.number(c, f"{where}[{i}]"))
+    return parts, any(isinstance(c, str) for c in v)
+
+
+def _load(ck: _Checker, v: Any, where: str) -> tuple[float, float] | FieldExpression:
+    parts, has_expr = _components(ck, v, where, ("x", "y", "t"))
+    if not has_expr:
+        return (float(parts[0]), float(parts[1]))  # type: ignore[arg-type]
+    return FieldExpression(parts, _show_list(v))
+
+
+def _show_list(v: list[Any]) -> str:
+    return "[" + ", ".join(repr(c) if isinstance(c, str) else f"{c!r}" for c in v) + "]"
+
+
+def _velocity(ck: _Checker, v: Any) -> tuple[float, float] | dict[str, Any] | VelocityExpression:
     where = "[contact] v_star"
     if isinstance(v, dict):
         ck.keys(v, ("t", "values"), where, required=("t", "values"))
@@ -520,13 +817,21 @@ def _velocity(ck: _Checker, v: Any) -> tuple[float, float] | dict[str, Any]:
         vals_raw = ck.array(v["values"], f"{where}.values")
         vals = [list(ck.vector(x, f"{where}.values[{i}]")) for i, x in enumerate(vals_raw)]
         if len(ts) != len(vals):
-            raise ck.fail(f"{where}:", f"'t' and 'values' must have the same length, "
-                          f"got {len(ts)} and {len(vals)}")
+            raise ck.fail(
+                f"{where}:",
+                f"'t' and 'values' must have the same length, got {len(ts)} and {len(vals)}",
+            )
         return {"t": ts, "values": vals}
     if not isinstance(v, list):
-        raise ck.fail(where, "must be an array [vx, vy] or a table { t, values }, "
-                      f"got {_kind(v)} ({_show(v)})")
-    vec = ck.vector(v, where)
+        raise ck.fail(
+            where,
+            "must be an array [vx, vy] (numbers or expression strings in t) "
+            f"or a table {{ t, values }}, got {_kind(v)} ({_show(v)})",
+        )
+    parts, has_expr = _components(ck, v, where, ("t",))
+    if has_expr:
+        return VelocityExpression(parts, _show_list(v))
+    vec = (float(parts[0]), float(parts[1]))  # type: ignore[arg-type]
     if vec == (0.0, 0.0):
         raise ck.fail(where, "must not be zero (the foundation must move, H0(c))")
     return vec
@@ -536,13 +841,24 @@ def _velocity(ck: _Checker, v: Any) -> tuple[float, float] | dict[str, Any]:
 def _time(ck: _Checker, sec: dict[str, Any]) -> TimeGrid:
     where = "[time]"
     ck.keys(sec, _SECTIONS["time"][0], where)
-    kinds = [k for k in ("steps", "dt", "pattern") if k in sec]
+    kinds = [k for k in ("steps", "dt", "pattern", "levels") if k in sec]
     if len(kinds) != 1:
-        raise ck.fail(where, "needs exactly one of 'steps' (uniform), 'dt' (explicit step "
-                      "sizes) or 'pattern' (repeated step sizes)"
-                      + (f"; got {', '.join(kinds)}" if kinds else ""))
+        raise ck.fail(
+            where,
+            "needs exactly one of 'steps' (uniform), 'dt' (explicit step "
+            "sizes), 'pattern' (repeated step sizes) or 'levels' (explicit time "
+            "levels)" + (f"; got {', '.join(kinds)}" if kinds else ""),
+        )
     kind = kinds[0]
     T = ck.number(sec["T"], f"{where} T", gt=0.0) if "T" in sec else None
+    if kind == "levels":
+        lv = ck.numbers(sec["levels"], f"{where} levels", min_len=2)
+        if lv[0] != 0.0:
+            raise ck.fail(f"{where} levels", f"must start at t_0 = 0, got {lv[0]:g}")
+        ck.numbers(lv, f"{where} levels", increasing=True)
+        if T is not None and abs(lv[-1] - T) > 1e-9 * max(T, 1.0):
+            raise ck.fail(f"{where} levels", f"end at {lv[-1]:.12g}, but T = {T:g}")
+        return TimeGrid(np.array(lv))
     if kind == "dt":
         dt = ck.numbers(sec["dt"], f"{where} dt", gt=0.0)
         total = math.fsum(dt)
@@ -567,6 +883,119 @@ def _default_times(grid: TimeGrid) -> tuple[float, ...]:
     T = grid.T
     idx = sorted({int(np.abs(grid.t - q * T).argmin()) for q in (0.25, 0.5, 0.75, 1.0)})
     return tuple(float(grid.t[i]) for i in idx)
+
+
+# ---------------------------------------------------------------------------- data checks
+def _check_velocity(ck: _Checker, v_star: Any, grid: TimeGrid) -> None:
+    """``v*`` must be finite and non-zero at every time level (H0(c)), whatever its form."""
+    where = "[contact] v_star"
+    t = np.asarray(grid.t)
+    if isinstance(v_star, VelocityExpression):
+        V = v_star.values(t)
+    elif isinstance(v_star, dict):
+        ts, vals = np.asarray(v_star["t"]), np.asarray(v_star["values"], dtype=float)
+        V = np.column_stack([np.interp(t, ts, vals[:, 0]), np.interp(t, ts, vals[:, 1])])
+    else:
+        return  # a constant vector, checked to be non-zero
+    bad = np.flatnonzero(~np.all(np.isfinite(V), axis=1))
+    if bad.size:
+        n = int(bad[0])
+        raise ck.fail(where, f"is not finite at t = {t[n]:g} (level {n}): {V[n].tolist()}")
+    zero = np.flatnonzero(np.hypot(V[:, 0], V[:, 1]) == 0.0)
+    if zero.size:
+        n = int(zero[0])
+        more = f" and {zero.size - 1} more levels" if zero.size > 1 else ""
+        raise ck.fail(
+            where,
+            f"vanishes at t = {t[n]:g} (level {n}{more}); the foundation "
+            "must move at every time level (H0(c), v* != 0)",
+        )
+
+
+def _check_contact_data(ck: _Checker, mesh: Mesh, specs: Mapping[str, tuple[Any, str]]) -> None:
+    """g, mu, kappa at the contact nodes: finite, with their signs; the error names the node."""
+    cb = contact_boundary(mesh)
+    for name, (spec, rel) in specs.items():
+        where = f"[contact] {name}"
+        shown = f"= {spec.__name__!r} " if isinstance(spec, NodalExpression) else ""
+        v = (
+            nodal_values(spec, cb, name)
+            if not isinstance(spec, NodalExpression)
+            else np.broadcast_to(spec(cb.points), (cb.m,))
+        )
+        ok = np.isfinite(v) & ((v > 0) if rel == "> 0" else (v >= 0))
+        if not np.all(ok):
+            a = int(np.flatnonzero(~ok)[0])
+            raise ck.fail(
+                where,
+                f"{shown}must be {rel} on the contact part, but it is "
+                f"{v[a]:g} at contact node {a} (vertex {cb.nodes[a]}, x = "
+                f"{_pt(cb.points[a])})",
+            )
+
+
+def _check_loads(ck: _Checker, mesh: Mesh, grid: TimeGrid, loads: Mapping[str, Any]) -> None:
+    """Loads given by expressions give finite load vectors at every time level."""
+    for name, f in loads.items():
+        if not isinstance(f, FieldExpression):
+            continue
+        assemble = body_force_vector if name == "f1" else traction_vector
+        levels = range(len(grid.t)) if f.uses_t else range(1)
+        with np.errstate(all="ignore"):
+            for n in levels:
+                F = assemble(mesh, f, float(grid.t[n])).reshape(-1, 2)
+                bad = np.flatnonzero(~np.all(np.isfinite(F), axis=1))
+                if bad.size:
+                    v = int(bad[0])
+                    at = f" at t = {grid.t[n]:g} (level {n})" if f.uses_t else ""
+                    raise ck.fail(
+                        f"[loads] {name}",
+                        f"= {f.__name__} is not finite near "
+                        f"vertex {v} (x = {_pt(mesh.points[v])}){at}",
+                    )
+
+
+def smallness_report(problem: Problem, max_dofs: int = 200_000) -> tuple[str, str | None]:
+    """The smallness condition of Theorem 3.4, estimated for ``vemwear check`` and ``run``.
+
+    Parameters
+    ----------
+    problem : Problem
+        A validated problem (its discretization is assembled here).
+    max_dofs : int
+        Skip the estimate (an eigenvalue problem) above this number of dofs.
+
+    Returns
+    -------
+    row : str
+        A one-line summary of the estimate ``L_p ||mu|| c_0^2 / C_1``, for the
+        ``check`` table.
+    warning : str or None
+        A warning when the condition is doubtful (estimate >= 1), else None.
+    """
+    import warnings
+
+    if 2 * problem.mesh.n_points > max_dofs:
+        return f"not estimated (more than {max_dofs} dofs)", None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        est = problem.discrete.smallness_estimate()
+    r = float(est.get("ratio", float("nan")))
+    if not math.isfinite(r):
+        return "not estimated", None
+    if r < 1:
+        return f"L_p ||mu|| c0^2/C1 ~= {r:.3g} < 1: holds", None
+    row = (
+        f"L_p ||mu|| c0^2/C1 ~= {r:.3g} >= 1: MAY FAIL (step problems may not be uniquely solvable)"
+    )
+    warning = (
+        f"the smallness condition of Theorem 3.4 is doubtful: L_p ||mu|| c0^2/C1 "
+        f"~= {r:.3g} >= 1 (L_p = {est.get('L_p', float('nan')):g}, max mu = "
+        f"{est.get('mu_max', float('nan')):g}, c0^2/C1 ~= "
+        f"{est.get('c0_sq_over_C1', float('nan')):.3g}); the step problems may not be "
+        "uniquely solvable and the solver may fail; reduce mu or the stiffness of p"
+    )
+    return row, warning
 
 
 # ---------------------------------------------------------------------------- entry points
@@ -638,9 +1067,13 @@ def parse_config(
     for k in data:
         if k not in allowed_top:
             sugg = difflib.get_close_matches(k, allowed_top, n=1, cutoff=0.6)
-            hint = (f"; did you mean [{sugg[0]}]?" if sugg and sugg[0] in _SECTIONS
-                    else f"; did you mean {sugg[0]!r}?" if sugg
-                    else f"; valid sections: {', '.join(f'[{s}]' for s in _SECTIONS)}")
+            hint = (
+                f"; did you mean [{sugg[0]}]?"
+                if sugg and sugg[0] in _SECTIONS
+                else f"; did you mean {sugg[0]!r}?"
+                if sugg
+                else f"; valid sections: {', '.join(f'[{s}]' for s in _SECTIONS)}"
+            )
             raise ck.fail("", f"unknown section or key {k!r}{hint}")
     for name, (_keys, required) in _SECTIONS.items():
         if required and name not in data:
@@ -654,18 +1087,22 @@ def parse_config(
     # -- material, vem, loads
     mat = data["material"]
     ck.keys(mat, _SECTIONS["material"][0], "[material]", required=("lam", "eta"))
-    material = Material(ck.number(mat["lam"], "[material] lam", gt=0.0),
-                        ck.number(mat["eta"], "[material] eta", gt=0.0))
-    stab = ck.string(data.get("vem", {}).get("stabilization", "paper"),
-                     "[vem] stabilization", choices=STABILIZATIONS)
+    material = Material(
+        ck.number(mat["lam"], "[material] lam", gt=0.0),
+        ck.number(mat["eta"], "[material] eta", gt=0.0),
+    )
+    stab = ck.string(
+        data.get("vem", {}).get("stabilization", "paper"),
+        "[vem] stabilization",
+        choices=STABILIZATIONS,
+    )
     loads = data.get("loads", {})
-    f1 = ck.vector(loads["f1"], "[loads] f1") if "f1" in loads else (0.0, 0.0)
-    f2 = ck.vector(loads["f2"], "[loads] f2") if "f2" in loads else (0.0, 0.0)
+    f1 = _load(ck, loads["f1"], "[loads] f1") if "f1" in loads else (0.0, 0.0)
+    f2 = _load(ck, loads["f2"], "[loads] f2") if "f2" in loads else (0.0, 0.0)
 
     # -- contact
     con = data["contact"]
-    ck.keys(con, _SECTIONS["contact"][0], "[contact]",
-            required=("p", "g", "mu", "kappa", "v_star"))
+    ck.keys(con, _SECTIONS["contact"][0], "[contact]", required=("p", "g", "mu", "kappa", "v_star"))
     p = _compliance(ck, con["p"])
     g = _nodal(ck, con["g"], "g", gt=0.0)
     mu = _nodal(ck, con["mu"], "mu", ge=0.0)
@@ -673,7 +1110,13 @@ def parse_config(
     v_star = _velocity(ck, con["v_star"])
 
     # -- time and output times
-    grid = _time(ck, data["time"])
+    try:
+        grid = _time(ck, data["time"])
+    except ConfigError:
+        raise
+    except (ValueError, MemoryError, OverflowError) as exc:  # e.g. far too many levels
+        raise ck.fail("[time]", f"does not give a valid time grid: {exc}") from None
+    _check_velocity(ck, v_star, grid)
     out = data.get("output", {})
     if "times" in out:
         times = ck.numbers(out["times"], "[output] times", ge=0.0)
@@ -682,10 +1125,12 @@ def parse_config(
                 grid.index([t])
             except ValueError:
                 near = float(grid.t[int(np.abs(grid.t - t).argmin())])
-                raise ck.fail(f"[output] times[{i}]",
-                              f"= {t:g} is not a time level of the grid "
-                              f"(T = {grid.T:g}, {grid.n_steps} steps; nearest level "
-                              f"{near:.12g})") from None
+                raise ck.fail(
+                    f"[output] times[{i}]",
+                    f"= {t:g} is not a time level of the grid "
+                    f"(T = {grid.T:g}, {grid.n_steps} steps; nearest level "
+                    f"{near:.12g})",
+                ) from None
         out_times = tuple(times)
     else:
         out_times = _default_times(grid)
@@ -710,19 +1155,52 @@ def parse_config(
     # -- mesh and boundary (after the cheap checks), then the problem itself
     if "mesh" not in data:  # pragma: no cover - caught above
         raise ck.fail("", "missing required section [mesh]")
-    mesh, mesh_info = build_mesh(data["mesh"], base_dir, source)
+    mesh, mesh_info = build_mesh(
+        data["mesh"], base_dir, source, file_tags=not isinstance(data.get("boundary"), dict)
+    )
+    from_file = "file" in mesh_info
     try:
-        mesh = _boundary(ck, data, mesh, from_file="file" in mesh_info)
+        mesh = _boundary(ck, data, mesh, from_file=from_file)
+        if from_file and not isinstance(data.get("boundary"), dict):
+            for name in ("clamped", "contact"):
+                if not np.any(mesh.boundary_tags == part_code(name)):
+                    raise ck.fail(
+                        f"[mesh] file {data['mesh']['file']!r}:",
+                        f"the file tags no {name!r} boundary edges (line cells "
+                        f"with cell data 'part' = {part_code(name)}, or a Gmsh "
+                        f"physical group {name!r}); tag them or add a [boundary] "
+                        "section",
+                    )
+        _check_contact_data(
+            ck, mesh, {"g": (g, "> 0"), "mu": (mu, ">= 0"), "kappa": (kappa, ">= 0")}
+        )
+        _check_loads(ck, mesh, grid, {"f1": f1, "f2": f2})
         problem = Problem(
-            mesh=mesh, material=material, time=grid, f1=f1, f2=f2, p=p, g=g, mu=mu,
-            kappa=kappa, v_star=v_star, stabilization=stab,
+            mesh=mesh,
+            material=material,
+            time=grid,
+            f1=f1,
+            f2=f2,
+            p=p,
+            g=g,
+            mu=mu,
+            kappa=kappa,
+            v_star=v_star,
+            stabilization=stab,
         )
     except ConfigError:
         raise
     except ValueError as exc:  # MeshError is a ValueError
         raise ck.fail("", f"invalid problem: {exc}") from exc
-    return Config(path=path, data=_jsonable(data), title=title, problem=problem,
-                  solver=solver, output=output, mesh_source=mesh_info)
+    return Config(
+        path=path,
+        data=_jsonable(data),
+        title=title,
+        problem=problem,
+        solver=solver,
+        output=output,
+        mesh_source=mesh_info,
+    )
 
 
 def _jsonable(x: Any) -> Any:

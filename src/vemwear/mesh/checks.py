@@ -12,8 +12,9 @@ _SHOW = 10
 
 
 def _ids(a: NDArray) -> str:
-    a = np.asarray(a).ravel()
-    more = f" and {a.size - _SHOW} more" if a.size > _SHOW else ""
+    """The first few ids (or id pairs) of a list, for messages."""
+    a = np.asarray(a)
+    more = f" and {len(a) - _SHOW} more" if len(a) > _SHOW else ""
     return f"{a[:_SHOW].tolist()}{more}"
 
 
@@ -121,6 +122,58 @@ def check_conforming(mesh: Mesh, rtol: float = 1e-9) -> None:
                 f"non-conforming edge ({be[e, 0]}, {be[e, 1]}) of cell {cell}: vertex {v} lies "
                 "on it but is not a vertex of that cell (add hanging nodes to the cell's list)"
             )
+    _check_nested_pieces(mesh)  # last: the messages above are more specific
+
+
+def _check_nested_pieces(mesh: Mesh) -> None:
+    """Pieces of the mesh (cells connected through shared edges) must not lie inside
+    one another: a cell placed inside another cell shares no edge with it."""
+    from matplotlib.path import Path
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    de, n = mesh.directed_edges, mesh.n_points
+    key = de[:, 0] * n + de[:, 1]
+    rev = de[:, 1] * n + de[:, 0]
+    order = np.argsort(key)
+    pos = np.clip(np.searchsorted(key[order], rev), 0, len(key) - 1)
+    twin = order[pos]
+    has = key[twin] == rev
+    a, b = mesh.edge_cells[has], mesh.edge_cells[twin[has]]
+    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(mesh.n_cells, mesh.n_cells))
+    npieces, piece = connected_components(graph, directed=False)
+    if npieces == 1:
+        return
+    be, owner = mesh.boundary_edges, piece[mesh.boundary_edge_cells]
+    for k in range(npieces):
+        edges = be[owner == k]
+        succ = dict(zip(edges[:, 0].tolist(), edges[:, 1].tolist(), strict=True))
+        loops, seen = [], set()
+        for v0 in succ:  # the outer loop is the one with the largest signed area
+            if v0 in seen:
+                continue
+            loop, v = [], v0
+            while v not in seen and v in succ:
+                seen.add(v)
+                loop.append(v)
+                v = succ[v]
+            loops.append(loop)
+        outer = max(loops, key=lambda lp: _signed_area(mesh.points[lp]))
+        inside = Path(mesh.points[outer]).contains_points(mesh.points)
+        others = np.unique(mesh.cell_vertices[piece[mesh.edge_cells] != k])
+        others = others[~np.isin(others, outer)]
+        hit = others[inside[others]]
+        if hit.size:
+            cells = np.flatnonzero(piece == k)
+            raise MeshError(
+                f"cells overlap: vertex {hit[0]} of another piece of the mesh lies inside the "
+                f"piece made of cells {_ids(cells)}"
+            )
+
+
+def _signed_area(p: NDArray[np.float64]) -> float:
+    q = np.roll(p, -1, axis=0)
+    return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
 
 
 def check_boundary(mesh: Mesh, require: tuple[str, ...] = ("clamped",)) -> None:

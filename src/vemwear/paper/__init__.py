@@ -35,6 +35,9 @@ __all__ = ["EXAMPLES", "ExampleRun", "available_examples", "load_example"]
 #: Example number -> module name in this package.
 EXAMPLES: dict[str, str] = {
     "5.2": "ex52",
+    "5.3": "ex53",
+    "5.4": "ex54",
+    "5.5": "ex55",
 }
 
 
@@ -78,9 +81,7 @@ def load_example(name: str) -> ModuleType:
         If there is no such example; the message lists the available ones.
     """
     if name not in EXAMPLES:
-        raise KeyError(
-            f"unknown example {name!r}; available: {', '.join(EXAMPLES)}"
-        )
+        raise KeyError(f"unknown example {name!r}; available: {', '.join(EXAMPLES)}")
     return importlib.import_module(f"{__name__}.{EXAMPLES[name]}")
 
 
@@ -91,4 +92,3 @@ def available_examples() -> dict[str, str]:
         mod = load_example(name)
         out[name] = f"{mod.TITLE}: {mod.DESCRIPTION}"
     return out
-

@@ -54,8 +54,9 @@ __all__ = [
 
 NAME = "5.2"
 TITLE = "Example 5.2"
-DESCRIPTION = ("wear and penetration for (mu, kappa) = (0.2, 2), (0.2, 10), (0.6, 10) "
-               "(paper Figs. 3-5)")
+DESCRIPTION = (
+    "wear and penetration for (mu, kappa) = (0.2, 2), (0.2, 10), (0.6, 10) (paper Figs. 3-5)"
+)
 
 #: The three data sets of the paper, by subdirectory name.
 DATA_SETS: dict[str, dict[str, float]] = {
@@ -134,8 +135,10 @@ def problems(*, divisions: tuple[int, int] = DIVISIONS, steps: int = STEPS) -> d
         must be levels, so ``steps`` must be a multiple of 4 for :func:`run`.
     """
     m = mesh(divisions)
-    return {name: problem(d["mu"], d["kappa"], tagged_mesh=m, steps=steps)
-            for name, d in DATA_SETS.items()}
+    return {
+        name: problem(d["mu"], d["kappa"], tagged_mesh=m, steps=steps)
+        for name, d in DATA_SETS.items()
+    }
 
 
 def _worn_area(result: Result) -> float:
@@ -159,10 +162,11 @@ def findings(results: dict[str, Result]) -> dict[str, Any]:
         "max_wear": mw,
         "max_wear_at": at,
         "worn_area": area,
-        "kappa_increases_wear": {"max": mw["set2"] > mw["set1"],
-                                 "area": area["set2"] > area["set1"]},
-        "mu_decreases_wear": {"max": mw["set3"] < mw["set2"],
-                              "area": area["set3"] < area["set2"]},
+        "kappa_increases_wear": {
+            "max": mw["set2"] > mw["set1"],
+            "area": area["set2"] > area["set1"],
+        },
+        "mu_decreases_wear": {"max": mw["set3"] < mw["set2"], "area": area["set3"] < area["set2"]},
     }
 
 
@@ -229,7 +233,8 @@ def report_markdown(results: dict[str, Result], info: dict[str, Any]) -> str:
         "## Files",
         "",
         "- `fig3.png`, `fig4.png`, `fig5.png`: w and u_nu - w on Gamma_C at t = "
-        + ", ".join(f"{t:g}" for t in TIMES) + " (paper Figs. 3-5).",
+        + ", ".join(f"{t:g}" for t in TIMES)
+        + " (paper Figs. 3-5).",
         "- `wear_T_comparison.png`: w(T) of the three sets.",
         "- `set1/`, `set2/`, `set3/`: the output of `vemwear run` for each set "
         "(result.npz, summary.json, figures, VTK series).",
@@ -290,8 +295,10 @@ def run(
     try:  # before any solve: the figure times must be time levels
         grid.index(TIMES)
     except ValueError:
-        raise ValueError(f"{TITLE}: steps must be a multiple of 4 (the figures are at t = "
-                         f"{', '.join(f'{t:g}' for t in TIMES)}), got {steps}") from None
+        raise ValueError(
+            f"{TITLE}: steps must be a multiple of 4 (the figures are at t = "
+            f"{', '.join(f'{t:g}' for t in TIMES)}), got {steps}"
+        ) from None
     results: dict[str, Result] = {}
     files: list[str] = []
     for name, pr in probs.items():
@@ -302,26 +309,47 @@ def run(
         results[name] = res
         sub = out / name
         sub.mkdir(parents=True, exist_ok=True)
-        extra = {"example": NAME, "set": name, "data": dict(d),
-                 "divisions": list(divisions), "steps": steps}
+        extra = {
+            "example": NAME,
+            "set": name,
+            "data": dict(d),
+            "divisions": list(divisions),
+            "steps": steps,
+        }
         w = write_outputs(res, sub, times=TIMES, figures=figures, vtk=vtk, extra=extra)
         files += [f"{name}/{f}" for group in w.values() for f in group]
     if figures:
         from .. import post
 
         for name in results:  # the sets' contact profiles are at TIMES: the paper's figures
-            shutil.copyfile(out / name / FIGURE_NAMES["contact_profiles"],
-                            out / PAPER_FIGURES[name])
+            shutil.copyfile(
+                out / name / FIGURE_NAMES["contact_profiles"], out / PAPER_FIGURES[name]
+            )
             files.append(PAPER_FIGURES[name])
         post.compare_profiles(
-            dict(results), T, "wear",
-            out / "wear_T_comparison.png", title=f"{TITLE}: wear w at t = {T:g}")
+            dict(results),
+            T,
+            "wear",
+            out / "wear_T_comparison.png",
+            title=f"{TITLE}: wear w at t = {T:g}",
+        )
         files.append("wear_T_comparison.png")
     elapsed = time.perf_counter() - t0
-    info = {"divisions": tuple(divisions), "steps": steps, "solver": opts.method,
-            "elapsed": elapsed}
+    info = {
+        "divisions": tuple(divisions),
+        "steps": steps,
+        "solver": opts.method,
+        "elapsed": elapsed,
+    }
     report = out / "example_5_2.md"
     report.write_text(report_markdown(results, info), encoding="utf-8")
     files.append(report.name)
-    return ExampleRun(name=NAME, outdir=out, results=results, files=files, report=report,
-                      details=findings(results), elapsed=time.perf_counter() - t0)
+    return ExampleRun(
+        name=NAME,
+        outdir=out,
+        results=results,
+        files=files,
+        report=report,
+        details=findings(results),
+        elapsed=time.perf_counter() - t0,
+    )

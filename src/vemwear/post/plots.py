@@ -311,24 +311,47 @@ def compare_profiles(
             mk = markers[i % len(markers)]
             shrink = 0.72**i
             if style == "scatter":
-                ax.scatter(x, y, s=max(36.0 * shrink, 6.0), marker=mk, lw=1.0, label=name,
-                           edgecolors=c, facecolors=c if j % 2 == 0 else "none", zorder=2 + i)
+                ax.scatter(
+                    x,
+                    y,
+                    s=max(36.0 * shrink, 6.0),
+                    marker=mk,
+                    lw=1.0,
+                    label=name,
+                    edgecolors=c,
+                    facecolors=c if j % 2 == 0 else "none",
+                    zorder=2 + i,
+                )
             else:
                 xs, ys = _broken(x[order], y[order], breaks)
                 kw: dict[str, Any] = {}
                 if len(x) <= 80:
-                    kw = {"marker": mk, "markersize": max(5.0 * shrink, 2.0),
-                          "markerfacecolor": c if j % 2 == 0 else "white"}
-                ax.plot(xs, ys, color=c, lw=max(2.2 * shrink, 0.9),
-                        ls=linestyles[j % len(linestyles)], label=name, zorder=2 + i, **kw)
+                    kw = {
+                        "marker": mk,
+                        "markersize": max(5.0 * shrink, 2.0),
+                        "markerfacecolor": c if j % 2 == 0 else "white",
+                    }
+                ax.plot(
+                    xs,
+                    ys,
+                    color=c,
+                    lw=max(2.2 * shrink, 0.9),
+                    ls=linestyles[j % len(linestyles)],
+                    label=name,
+                    zorder=2 + i,
+                    **kw,
+                )
     ax.set_xlabel(_ABSCISSA_LABEL[which])
     ax.set_ylabel(QUANTITIES[quantities[0]] if len(quantities) == 1 else "value")
     ax.grid(True, lw=0.4, alpha=0.5)
     ax.set_xlim(*_extent(first, which))
     ax.legend(loc="best", frameon=False, fontsize="small")
     if title is None:
-        what = (QUANTITIES[quantities[0]] if len(quantities) == 1
-                else " and ".join(QUANTITIES[q] for q in quantities))
+        what = (
+            QUANTITIES[quantities[0]]
+            if len(quantities) == 1
+            else " and ".join(QUANTITIES[q] for q in quantities)
+        )
         title = f"{_cap(what)} at $t$ = {time:g}"
         if common:
             title += f": {params[next(iter(results))]}"
@@ -435,8 +458,9 @@ def plot_displacement(
     ext = np.maximum(hi - lo, 1e-300)
     aspect = float(ext[1] / ext[0])
     pw = 5.6 if len(comps) > 1 else 6.6  # inches per panel, of which ~1.5 go to labels/bar
-    fig = Figure(figsize=(pw * len(comps), min((pw - 1.5) * aspect, 7.0) + 1.2),
-                 layout="constrained")
+    fig = Figure(
+        figsize=(pw * len(comps), min((pw - 1.5) * aspect, 7.0) + 1.2), layout="constrained"
+    )
     axes = np.atleast_1d(fig.subplots(1, len(comps)))
     show_edges = mesh.n_cells <= 4096 if edges is None else edges
     labels = {0: r"$u_{h,1}$", 1: r"$u_{h,2}$", "magnitude": r"$|\mathbf{u}_h|$"}
@@ -444,8 +468,9 @@ def plot_displacement(
         vals = np.linalg.norm(u, axis=1) if c == "magnitude" else u[:, int(c)]
         tpc = ax.tripcolor(tri, extend(vals), shading="gouraud", cmap=cmap, rasterized=True)
         if show_edges:
-            _cell_outlines(ax, mesh, mesh.points, colors="k", linewidths=_edge_width(mesh),
-                           alpha=0.35)
+            _cell_outlines(
+                ax, mesh, mesh.points, colors="k", linewidths=_edge_width(mesh), alpha=0.35
+            )
         ax.set_aspect("equal")
         ax.set_xlim(lo[0], hi[0])
         ax.set_ylim(lo[1], hi[1])
@@ -457,9 +482,7 @@ def plot_displacement(
         cb.formatter.set_powerlimits((-2, 3))  # type: ignore[attr-defined]
         cb.update_ticks()
     counts = ", ".join(f"{len(i)} {_ngon(n)}" for n, (i, _v) in sorted(mesh.groups.items()))
-    fig.suptitle(
-        f"Displacement at $t$ = {result.t[lv]:g} ({counts}): {_params(result)}"
-    )
+    fig.suptitle(f"Displacement at $t$ = {result.t[lv]:g} ({counts}): {_params(result)}")
     return _finish(fig, path)
 
 
@@ -567,8 +590,10 @@ def plot_deformed(
         ax.add_collection(LineCollection(X[be], colors=color, linewidths=1.2))
     ce = mesh.part_edges("contact")
     chains = _edge_chains(ce)
-    for X, kw in ((P, {"color": "#f4a582", "lw": 2.0, "ls": "--"}),
-                  (Q, {"color": "#b2182b", "lw": 2.2})):
+    for X, kw in (
+        (P, {"color": "#f4a582", "lw": 2.0, "ls": "--"}),
+        (Q, {"color": "#b2182b", "lw": 2.2}),
+    ):
         for ch in chains:
             line = _polyline(X[ce[ch]])
             ax.plot(line[:, 0], line[:, 1], solid_capstyle="butt", **kw)
@@ -586,10 +611,21 @@ def plot_deformed(
         for ch in chains:
             r, o = _polyline(rigid[ch]), _polyline(outer[ch])
             ax.plot(r[:, 0], r[:, 1], color="k", lw=1.0, ls=(0, (4, 2)))
-            ax.add_collection(PolyCollection([np.concatenate([r, o[::-1]])],
-                                             facecolors="0.55", alpha=0.35, linewidths=0))
-        handles.append(Line2D([], [], color="k", lw=1.0, ls=(0, (4, 2)),
-                              label=r"rigid layer $u_\nu = g$ (magnified)"))
+            ax.add_collection(
+                PolyCollection(
+                    [np.concatenate([r, o[::-1]])], facecolors="0.55", alpha=0.35, linewidths=0
+                )
+            )
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color="k",
+                lw=1.0,
+                ls=(0, (4, 2)),
+                label=r"rigid layer $u_\nu = g$ (magnified)",
+            )
+        )
         lo = np.minimum(lo, outer.reshape(-1, 2).min(axis=0))
         hi = np.maximum(hi, outer.reshape(-1, 2).max(axis=0))
     pad = 0.03 * size
@@ -598,11 +634,14 @@ def plot_deformed(
     ax.set_aspect("equal")
     ax.set_xlabel(r"$x_1$")
     ax.set_ylabel(r"$x_2$")
-    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize="small",
-               frameon=False)
-    ax.set_title(f"Deformed mesh at $t$ = {result.t[lv]:g}: {_params(result)}\n"
-                 f"displacement magnified × {scale:.3g} (max $|\\mathbf{{u}}_h|$ = {umax:.3g})",
-                 fontsize="medium")
+    fig.legend(
+        handles=handles, loc="outside lower center", ncols=3, fontsize="small", frameon=False
+    )
+    ax.set_title(
+        f"Deformed mesh at $t$ = {result.t[lv]:g}: {_params(result)}\n"
+        f"displacement magnified × {scale:.3g} (max $|\\mathbf{{u}}_h|$ = {umax:.3g})",
+        fontsize="medium",
+    )
     return _finish(fig, path)
 
 
@@ -637,12 +676,17 @@ def plot_time_history(
     ax2.set_ylim(0, max(int(it.max(initial=1)), 1) * 2.2)
     ax.set_zorder(ax2.get_zorder() + 1)
     ax.patch.set_visible(False)
-    ax.plot(t, np.asarray(result.wear).max(axis=1), color="#b2182b", lw=1.8,
-            label=r"max $w$")
-    ax.plot(t, np.asarray(result.penetration).max(axis=1), color="#2166ac", lw=1.8,
-            label=r"max $(u_\nu - w)$")
-    ax.plot(t, np.asarray(result.u_nu).max(axis=1), color="0.2", lw=1.2, ls="--",
-            label=r"max $u_\nu$")
+    ax.plot(t, np.asarray(result.wear).max(axis=1), color="#b2182b", lw=1.8, label=r"max $w$")
+    ax.plot(
+        t,
+        np.asarray(result.penetration).max(axis=1),
+        color="#2166ac",
+        lw=1.8,
+        label=r"max $(u_\nu - w)$",
+    )
+    ax.plot(
+        t, np.asarray(result.u_nu).max(axis=1), color="0.2", lw=1.2, ls="--", label=r"max $u_\nu$"
+    )
     ax.set_xlabel(r"time $t$")
     ax.set_ylabel(r"max over $\Gamma_C$")
     ax.grid(True, lw=0.4, alpha=0.5)

@@ -60,6 +60,10 @@
                                            the order of ``residual_names``
     ``residual_names``          (3,)       ``equilibrium``, ``feasibility``,
                                            ``complementarity``
+    ``completed``               ()         number of finished time levels: ``L`` for a
+                                           complete run; fewer for the partial result of
+                                           an interrupted run (levels ``>= completed``
+                                           are zero and ``u_levels < completed``)
     ``vemwear_version``         ()         version string of the writer
     ==========================  =========  ============================================
 
@@ -71,7 +75,14 @@
     largest value of each KKT residual), ``timings`` (``Result.timings``, seconds),
     ``outputs`` (key numbers of the solution: maximal wear at the final time and where,
     worn area, maximal ``u_nu``, penetration, pressures and displacement) and
-    ``files``. Non-finite numbers are written as ``null``.
+    ``files``, and ``partial`` (false, or true for the finished levels of an interrupted
+    run, with ``completed``, ``levels`` and the ``reason``). Non-finite numbers are written
+    as ``null``.
+
+A partial result (:attr:`Result.is_partial`) is saved the same way; its statistics and
+outputs cover the finished levels only. :func:`result_from_arrays` turns the arrays of
+``result.npz`` back into a :class:`~vemwear.simulate.Result` of a given problem, e.g. to
+resume an interrupted run with ``simulate(problem, resume=result)``.
 """
 
 from __future__ import annotations
@@ -101,6 +112,7 @@ __all__ = [
     "load_summary",
     "mesh_from_arrays",
     "result_arrays",
+    "result_from_arrays",
     "save_result",
     "summarize",
 ]
@@ -140,6 +152,7 @@ def result_arrays(result: Result) -> dict[str, NDArray[Any]]:
         "iterations": np.asarray(result.iterations, dtype=np.int64),
         "residuals": np.asarray(result.residuals, dtype=np.float64),
         "residual_names": np.array(result.RESIDUAL_NAMES, dtype=str),
+        "completed": np.array(int(result.completed), dtype=np.int64),
         "vemwear_version": np.array(__version__, dtype=str),
     }
 
@@ -182,8 +195,9 @@ def summarize(result: Result) -> dict[str, Any]:
     dict
         ``{"statistics": {...}, "outputs": {...}}`` with plain Python numbers.
     """
-    it = np.asarray(result.iterations)
-    res = np.asarray(result.residuals)
+    c = int(result.completed)  # a partial result: statistics of the finished levels
+    it = np.asarray(result.iterations)[:c]
+    res = np.asarray(result.residuals)[:c]
     names = tuple(result.RESIDUAL_NAMES)
     stats: dict[str, Any] = {
         "levels": len(result.t),
@@ -194,36 +208,47 @@ def summarize(result: Result) -> dict[str, Any]:
         "iterations_mean": float(it.mean()) if it.size else 0.0,
         "max_residual": {n: _max(res[:, i]) for i, n in enumerate(names)},
     }
-    wear_T = np.asarray(result.wear[-1])
-    pen = np.asarray(result.penetration)
+    last = max(c - 1, 0)  # the last finished level
+    m = len(result.contact_nodes)
+    wear_T = np.asarray(result.wear[last]) if c else np.zeros(m)
+    pen = np.asarray(result.penetration)[:c]
+    u_nu = np.asarray(result.u_nu)[:c]
     weights = np.asarray(result.problem.contact.weights)
-    unorm = np.linalg.norm(result.u, axis=-1)  # (L, n)
+    unorm = np.linalg.norm(result.u, axis=-1)  # (S, n)
     a = int(np.argmax(wear_T)) if wear_T.size else 0
-    active = np.asarray(result.problem.nodal["g"]) - np.asarray(result.u_nu[-1])
+    active = np.asarray(result.problem.nodal["g"]) - np.asarray(result.u_nu[last])
     g_scale = float(np.max(np.abs(result.problem.nodal["g"]), initial=1.0))
     outputs: dict[str, Any] = {
-        "t_final": float(result.t[-1]),
+        "t_final": float(result.t[last]),
         "wear_max_final": _max(wear_T),
         "wear_max_final_at": np.asarray(result.contact_points[a]).tolist() if wear_T.size else None,
         "wear_area_final": float(np.dot(weights, wear_T)),
-        "u_nu_max": _max(result.u_nu),
-        "u_nu_max_final": _max(result.u_nu[-1]),
+        "u_nu_max": _max(u_nu),
+        "u_nu_max_final": _max(u_nu[-1]) if c else float("nan"),
         "penetration_max": _max(pen),
-        "penetration_max_final": _max(pen[-1]),
-        "lam_max": _max(result.lam),
-        "p_max": _max(result.p),
+        "penetration_max_final": _max(pen[-1]) if c else float("nan"),
+        "lam_max": _max(np.asarray(result.lam)[:c]),
+        "p_max": _max(np.asarray(result.p)[:c]),
         "displacement_max": _max(unorm),
-        "displacement_max_final": _max(unorm[-1]),
-        "nodes_in_contact_final": int(np.sum(pen[-1] > 0)),
+        "displacement_max_final": _max(unorm[-1]) if len(unorm) else float("nan"),
+        "nodes_in_contact_final": int(np.sum(pen[-1] > 0)) if c else 0,
         "nodes_on_rigid_layer_final": int(np.sum(active <= 1e-9 * g_scale)),
     }
     return {"statistics": stats, "outputs": outputs}
 
 
-def _summary(result: Result, extra: dict[str, Any] | None) -> dict[str, Any]:
+def _summary(
+    result: Result, extra: dict[str, Any] | None, reason: str | None = None
+) -> dict[str, Any]:
     s = summarize(result)
+    partial: dict[str, Any] = {"partial": bool(result.is_partial or reason is not None)}
+    if partial["partial"]:
+        partial.update(
+            completed=int(result.completed), levels=len(result.t), reason=reason or "interrupted"
+        )
     return {
         "format": FORMAT,
+        **partial,
         "vemwear_version": __version__,
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "inputs": {"problem": result.problem.describe(), "extra": extra or {}},
@@ -246,6 +271,7 @@ def save_result(
     extra: dict[str, Any] | None = None,
     *,
     compress: bool = False,
+    partial: str | None = None,
 ) -> list[Path]:
     """Write ``result.npz`` and ``summary.json`` into ``outdir``.
 
@@ -265,6 +291,10 @@ def save_result(
         configuration the run was made from. NumPy values and paths are converted.
     compress : bool
         Use ``numpy.savez_compressed`` (smaller, slower) instead of ``numpy.savez``.
+    partial : str, optional
+        Why the run stopped, for the finished levels of an interrupted run: the summary
+        then says ``"partial": true`` with this ``reason`` (a result with
+        ``is_partial`` is always marked partial; the default reason is "interrupted").
 
     Returns
     -------
@@ -274,7 +304,7 @@ def save_result(
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
     arrays = result_arrays(result)
-    summary = _jsonable(_summary(result, extra))
+    summary = _jsonable(_summary(result, extra, partial))
     targets = [out / NPZ_NAME, out / SUMMARY_NAME]
     temps: list[Path] = []
     try:
@@ -352,4 +382,116 @@ def mesh_from_arrays(data: Mapping[str, NDArray[Any]]) -> Mesh:
         np.asarray(data["cells_offsets"]),
         np.asarray(data["cells_vertices"]),
         None if tags is None else np.asarray(tags),
+    )
+
+
+def result_from_arrays(
+    problem: Any,
+    data: Mapping[str, NDArray[Any]],
+    *,
+    solver: Mapping[str, Any] | None = None,
+) -> Result:
+    """Rebuild a :class:`~vemwear.simulate.Result` of ``problem`` from saved arrays.
+
+    Used to resume an interrupted run: ``simulate(problem, ..., resume=result)`` goes on
+    from the first unfinished level and gives the same numbers as an uninterrupted run.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem the arrays were computed for (same mesh, contact nodes and time grid).
+    data : mapping
+        The output of :func:`load_result` (a complete or a partial result).
+    solver : mapping, optional
+        Stored as ``Result.solver`` (e.g. the ``solver`` of ``summary.json``).
+
+    Returns
+    -------
+    Result
+        With ``completed`` from the arrays (``len(t)`` if the file has none).
+
+    Raises
+    ------
+    ValueError
+        If an array is missing or the arrays do not fit the problem (another time grid,
+        mesh or set of contact nodes); the message names the array.
+    """
+    from ..simulate.loop import Result
+
+    need = (
+        "t",
+        "points",
+        "u",
+        "u_levels",
+        "contact_nodes",
+        "contact_s",
+        "contact_points",
+        "wear",
+        "u_nu",
+        "lam",
+        "p",
+        "iterations",
+        "residuals",
+    )
+    missing = [k for k in need if k not in data]
+    if missing:
+        raise ValueError(f"saved result: missing arrays {', '.join(missing)}")
+    t = np.asarray(data["t"], dtype=np.float64)
+    L = len(problem.time.t)
+    if t.shape != (L,) or not np.array_equal(t, problem.time.t):
+        raise ValueError(
+            f"saved result: the time levels differ from the problem's "
+            f"({len(t)} saved, {L} in the problem)"
+        )
+    pts = np.asarray(data["points"], dtype=np.float64)
+    if pts.shape != problem.mesh.points.shape or not np.array_equal(pts, problem.mesh.points):
+        raise ValueError("saved result: the mesh vertices differ from the problem's mesh")
+    cn = np.asarray(data["contact_nodes"], dtype=np.int64)
+    if not np.array_equal(cn, problem.contact.nodes):
+        raise ValueError("saved result: the contact nodes differ from the problem's")
+    m, n = len(cn), len(pts)
+    shapes = {
+        "wear": (L, m),
+        "u_nu": (L, m),
+        "lam": (L, m),
+        "p": (L, m),
+        "iterations": (L,),
+        "residuals": (L, 3),
+        "contact_s": (m,),
+        "contact_points": (m, 2),
+    }
+    for k, shape in shapes.items():
+        if np.shape(data[k]) != shape:
+            raise ValueError(
+                f"saved result: array {k!r} has shape {np.shape(data[k])}, expected {shape}"
+            )
+    u = np.asarray(data["u"], dtype=np.float64)
+    u_levels = np.asarray(data["u_levels"], dtype=np.int64)
+    if u.ndim != 3 or u.shape[1:] != (n, 2) or u.shape[0] != len(u_levels):
+        raise ValueError(
+            f"saved result: array 'u' has shape {u.shape}, expected ({len(u_levels)}, {n}, 2)"
+        )
+    completed = int(data["completed"]) if "completed" in data else L
+    if not 0 <= completed <= L or np.any((u_levels < 0) | (u_levels >= completed)):
+        raise ValueError(
+            f"saved result: inconsistent 'completed' = {completed} "
+            f"(levels {L}, stored displacement levels {u_levels.tolist()[:5]})"
+        )
+    return Result(
+        problem=problem,
+        t=t.copy(),
+        points=pts.copy(),
+        u=u.copy(),
+        contact_nodes=cn.copy(),
+        contact_s=np.asarray(data["contact_s"], dtype=np.float64).copy(),
+        contact_points=np.asarray(data["contact_points"], dtype=np.float64).copy(),
+        wear=np.asarray(data["wear"], dtype=np.float64).copy(),
+        u_nu=np.asarray(data["u_nu"], dtype=np.float64).copy(),
+        lam=np.asarray(data["lam"], dtype=np.float64).copy(),
+        p=np.asarray(data["p"], dtype=np.float64).copy(),
+        iterations=np.asarray(data["iterations"], dtype=np.int64).copy(),
+        residuals=np.asarray(data["residuals"], dtype=np.float64).copy(),
+        u_levels=u_levels.copy(),
+        completed=completed,
+        solver=dict(solver or {}),
     )

@@ -104,9 +104,7 @@ def _pvd_text(entries: list[tuple[float, str]]) -> str:
         "  <Collection>",
     ]
     for t, fname in entries:
-        lines.append(
-            f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(fname)}/>'
-        )
+        lines.append(f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(fname)}/>')
     lines += ["  </Collection>", "</VTKFile>", ""]
     return "\n".join(lines)
 

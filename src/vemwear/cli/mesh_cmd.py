@@ -1,0 +1,957 @@
+"""The ``vemwear mesh`` commands: ``generate``, ``inspect``, ``plot`` and ``convert``.
+
+``vemwear mesh generate FAMILY -o FILE``
+    Build a mesh of a rectangle from one of the families of :mod:`vemwear.mesh`
+    (:data:`FAMILIES`), tag the paper's boundary parts (clamped left side, traction
+    top and right sides, contact bottom side), optionally refine it along the
+    contact part (hanging nodes) and write it as ``.vtu`` (any polygons) or ``.msh``
+    (gmsh 2.2: triangles and quadrilaterals only).
+``vemwear mesh inspect FILE_OR_CONFIG``
+    Counts (points, cells by vertex count, boundary edges per part, contact and
+    hanging nodes), validity (:func:`vemwear.mesh.check_mesh`) and the quality
+    report of assumption A1 (:func:`vemwear.mesh.quality_report`).
+``vemwear mesh plot FILE_OR_CONFIG -o PNG [--quality]``
+    The mesh with its boundary parts coloured, optionally every cell coloured by
+    ``rho_K / h_K``.
+``vemwear mesh convert IN OUT``
+    Read a mesh (or build the mesh of a configuration file) and write it in
+    another format.
+
+Wherever a mesh is read, a ``.toml`` path is a configuration file (``docs/config.md``)
+whose ``[mesh]`` and ``[boundary]`` sections give the tagged mesh. Output files are
+written atomically (through a temporary file in the same directory) and an existing
+file is replaced only with ``--force``. Invalid input is reported as one line and
+exit code 2, as for the other commands (:mod:`vemwear.cli.main`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import contextlib
+import difflib
+import inspect
+import io
+import json
+import math
+import os
+import sys
+import tempfile
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..mesh import (
+    PARTS,
+    Mesh,
+    MeshError,
+    distorted_quads,
+    hexagons,
+    nonconvex_mesh,
+    part_code,
+    quality_report,
+    read_mesh,
+    rectangle_squares,
+    rectangle_triangles,
+    rectangle_voronoi,
+    refine_along,
+    squares_with_hanging_nodes,
+    tag_rectangle,
+    write_mesh,
+)
+from ..mesh.checks import check_boundary, check_cells, check_conforming, check_vertices
+from .output import OutputDirError
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ..mesh import QualityReport
+
+__all__ = [
+    "FAMILIES",
+    "MESH_SUFFIXES",
+    "Family",
+    "add_parser",
+    "contact_nodes",
+    "generate_mesh",
+    "hanging_nodes",
+    "load_mesh",
+    "mesh_summary",
+    "plot_mesh",
+    "save_mesh",
+]
+
+#: Mesh file types that ``generate`` and ``convert`` write.
+MESH_SUFFIXES: dict[str, str] = {
+    ".vtu": "VTK unstructured grid (any polygons)",
+    ".msh": "gmsh 2.2 (triangles and quadrilaterals only)",
+}
+#: Colours of the boundary parts in ``vemwear mesh plot`` (untagged edges: orange).
+PART_COLORS: dict[str, str] = {
+    "clamped": "#2166ac",
+    "traction": "#1b7837",
+    "contact": "#b2182b",
+    "untagged": "#ff7f00",
+}
+PART_SYMBOLS: dict[str, str] = {
+    "clamped": r"$\Gamma_D$",
+    "traction": r"$\Gamma_N$",
+    "contact": r"$\Gamma_C$",
+}
+
+
+# ---------------------------------------------------------------------------- families
+@dataclass(frozen=True)
+class Family:
+    """A mesh family of ``vemwear mesh generate``.
+
+    Attributes
+    ----------
+    name : str
+        The command-line name.
+    function : callable
+        The generator of :mod:`vemwear.mesh`; called with ``size`` and, as given,
+        ``divisions``, ``n_cells``, ``seed`` and further keyword arguments.
+    description : str
+        One line for ``--help``.
+    cells_per_division : int
+        Cells per grid rectangle (1 for quadrilateral grids, 2 for triangles), so that
+        ``--cells N`` can be turned into divisions; 0 if ``--cells`` does not apply
+        (the count depends on the divisions in another way).
+    takes_divisions, takes_cells, takes_seed : bool
+        Which of ``--divisions``, ``--cells`` (as ``n_cells``) and ``--seed`` the
+        generator accepts.
+    """
+
+    name: str
+    function: Callable[..., Mesh]
+    description: str
+    cells_per_division: int = 1
+    takes_divisions: bool = True
+    takes_cells: bool = False
+    takes_seed: bool = False
+
+
+#: The families of ``vemwear mesh generate``, by command-line name.
+FAMILIES: dict[str, Family] = {
+    f.name: f
+    for f in (
+        Family("squares", rectangle_squares, "axis-aligned rectangles, nx * ny cells"),
+        Family(
+            "triangles",
+            rectangle_triangles,
+            "each grid rectangle cut into two triangles, 2 * nx * ny cells",
+            cells_per_division=2,
+        ),
+        Family(
+            "voronoi",
+            rectangle_voronoi,
+            "centroidal Voronoi polygons, exactly --cells cells (the paper's mesh B)",
+            cells_per_division=0,
+            takes_divisions=False,
+            takes_cells=True,
+            takes_seed=True,
+        ),
+        Family(
+            "distorted",
+            distorted_quads,
+            "grid quadrilaterals with randomly moved interior vertices",
+            takes_seed=True,
+        ),
+        Family(
+            "hexagons",
+            hexagons,
+            "hexagon-dominant (Voronoi cells of a triangular lattice)",
+            cells_per_division=0,
+        ),
+        Family("nonconvex", nonconvex_mesh, "chevron-shaped non-convex cells, nx * ny cells"),
+        Family(
+            "hanging",
+            squares_with_hanging_nodes,
+            "squares, every other one split in four (hanging nodes in the others)",
+            cells_per_division=0,
+            takes_seed=True,
+        ),
+    )
+}
+
+
+def _divisions_for(n: int, per: int, size: tuple[float, float], family: str) -> tuple[int, int]:
+    """Grid ``(nx, ny)`` with ``per * nx * ny == n`` whose rectangles are closest to squares."""
+    if n < 1 or n % per:
+        raise MeshError(
+            f"--cells {n}: family {family!r} has {per} cells per grid rectangle, "
+            f"so the count must be a positive multiple of {per}"
+        )
+    m = n // per
+    lx, ly = size
+    small = [d for d in range(1, math.isqrt(m) + 1) if m % d == 0]
+    best = min(
+        {*small, *(m // d for d in small)},
+        key=lambda nx: abs(math.log((lx / nx) / (ly / (m // nx)))),
+    )
+    nx, ny = best, m // best
+    ratio = max((lx / nx) / (ly / ny), (ly / ny) / (lx / nx))
+    if ratio > 2.0 + 1e-12:
+        raise MeshError(
+            f"--cells {n}: the closest grid for family {family!r} on a {lx:g} x {ly:g} "
+            f"rectangle is {nx} x {ny}, whose cells have aspect ratio {ratio:.3g} > 2; "
+            "choose another count or give --divisions NX NY"
+        )
+    return nx, ny
+
+
+def _parse_param(text: str) -> tuple[str, Any]:
+    """``NAME=VALUE`` with a Python literal value (a bare word is a string)."""
+    name, sep, value = text.partition("=")
+    name = name.strip()
+    if not sep or not name.isidentifier():
+        raise MeshError(f"--param {text!r}: expected NAME=VALUE, e.g. amplitude=0.1")
+    try:
+        return name, ast.literal_eval(value.strip())
+    except (ValueError, SyntaxError):
+        return name, value.strip()
+
+
+def generate_mesh(
+    family: str,
+    *,
+    size: Sequence[float] = (2.0, 1.0),
+    cells: int | None = None,
+    divisions: Sequence[int] | None = None,
+    seed: int | None = None,
+    params: Mapping[str, Any] | None = None,
+    refine_contact: int = 0,
+    boundary: str = "paper",
+) -> Mesh:
+    """Generate a mesh of the rectangle ``[0, lx] x [0, ly]`` from one of :data:`FAMILIES`.
+
+    Parameters
+    ----------
+    family : str
+        A key of :data:`FAMILIES`.
+    size : (lx, ly)
+        Side lengths (default: the paper's ``(2, 1)``).
+    cells : int, optional
+        Number of cells: exact for ``voronoi``; for grid families (squares, triangles,
+        distorted, nonconvex) the grid with that many cells whose rectangles are
+        closest to squares (aspect ratio at most 2).
+    divisions : (nx, ny), optional
+        Grid divisions (not for ``voronoi``). Without ``cells`` and ``divisions``
+        the generator's defaults apply.
+    seed : int, optional
+        Random seed (``voronoi``, ``distorted``, ``hanging`` with
+        ``params={"pattern": "random"}``).
+    params : mapping, optional
+        Further keyword arguments of the generator (e.g. ``amplitude`` of
+        ``distorted``, ``pattern`` of ``hanging``, ``diagonal`` of ``triangles``).
+    refine_contact : int
+        Refine the cells along the contact part this many times
+        (:func:`vemwear.mesh.refine_along`; needs ``boundary="paper"``).
+    boundary : {"paper", "none"}
+        ``paper``: clamped = left, traction = top and right, contact = bottom
+        (paper Section 5, :func:`vemwear.mesh.tag_rectangle`); ``none``: untagged.
+
+    Returns
+    -------
+    Mesh
+
+    Raises
+    ------
+    MeshError
+        For an unknown family, arguments the family does not take, or a generator
+        that rejects its arguments (the message says which).
+    """
+    if family not in FAMILIES:
+        raise MeshError(f"unknown mesh family {family!r}; available: {', '.join(FAMILIES)}")
+    fam = FAMILIES[family]
+    if boundary not in ("paper", "none"):
+        raise MeshError(f"--boundary must be 'paper' or 'none', got {boundary!r}")
+    lx, ly = (float(s) for s in size)
+    if not (lx > 0 and ly > 0 and math.isfinite(lx) and math.isfinite(ly)):
+        raise MeshError(f"--size must be two positive numbers, got {lx:g} {ly:g}")
+    if refine_contact < 0:
+        raise MeshError(f"--refine-contact must be >= 0, got {refine_contact}")
+    if refine_contact and boundary != "paper":
+        raise MeshError("--refine-contact needs the boundary parts (--boundary paper)")
+    kwargs: dict[str, Any] = {"size": (lx, ly)}
+    if cells is not None and divisions is not None:
+        raise MeshError("give either --cells or --divisions, not both")
+    if cells is not None:
+        if fam.takes_cells:
+            if cells < 1:
+                raise MeshError(f"--cells must be >= 1, got {cells}")
+            kwargs["n_cells"] = int(cells)
+        elif fam.cells_per_division:
+            kwargs["divisions"] = _divisions_for(
+                int(cells), fam.cells_per_division, (lx, ly), family
+            )
+        else:
+            raise MeshError(
+                f"family {family!r} does not take --cells (its cell count "
+                "follows from the divisions); give --divisions NX NY"
+            )
+    if divisions is not None:
+        if not fam.takes_divisions:
+            raise MeshError(f"family {family!r} does not take --divisions; give --cells N")
+        nx, ny = (int(d) for d in divisions)
+        if nx < 1 or ny < 1:
+            raise MeshError(f"--divisions must be positive integers, got {nx} {ny}")
+        kwargs["divisions"] = (nx, ny)
+    if seed is not None:
+        if not fam.takes_seed:
+            raise MeshError(f"family {family!r} is deterministic: --seed does not apply")
+        kwargs["seed"] = int(seed)
+    sig = inspect.signature(fam.function).parameters
+    known = [k for k, v in sig.items() if v.kind is not v.VAR_KEYWORD]
+    open_ended = len(known) < len(sig)  # **kwargs: passed on, checked by the callee
+    for key, value in (params or {}).items():
+        if key in ("n_cells", "divisions", "seed", "size"):
+            raise MeshError(f"--param {key}: use the option --{key.replace('n_', '')} instead")
+        if key not in known and not open_ended:
+            close = difflib.get_close_matches(key, known, n=1)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            raise MeshError(
+                f"--param {key}: family {family!r} has no such parameter; {hint}"
+                f"its parameters: {', '.join(known)}"
+            )
+        kwargs[key] = value
+    try:
+        mesh = fam.function(**kwargs)
+    except TypeError as exc:
+        raise MeshError(f"family {family!r}: {exc}") from exc
+    except ValueError as exc:
+        raise MeshError(f"family {family!r}: {exc}") from exc
+    if boundary == "paper":
+        mesh = tag_rectangle(mesh)
+    if refine_contact:
+        mesh = refine_along(mesh, "contact", int(refine_contact))
+    return mesh
+
+
+# ---------------------------------------------------------------------------- reading and writing
+@contextlib.contextmanager
+def _quiet() -> Iterator[io.StringIO]:
+    """Capture what meshio prints (blank lines, its reasons for failing)."""
+    chatter = io.StringIO()
+    with contextlib.redirect_stdout(chatter), contextlib.redirect_stderr(chatter):
+        yield chatter
+
+
+def load_mesh(path: str | os.PathLike[str]) -> Mesh:
+    """The mesh of a mesh file, or the tagged mesh of a configuration file (``.toml``).
+
+    Raises
+    ------
+    MeshError
+        If the file does not exist or cannot be read as a mesh.
+    ConfigError
+        If a configuration file is invalid.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise MeshError(f"{p}: no such file" if not p.exists() else f"{p}: not a file")
+    if p.suffix.lower() == ".toml":
+        from .config import load_config
+
+        return load_config(p).problem.mesh
+    with _quiet() as chatter:
+        try:
+            return read_mesh(p)
+        except SystemExit as exc:  # meshio exits on some files it cannot parse
+            why = " ".join(chatter.getvalue().split())
+            raise MeshError(
+                f"{p}: cannot read mesh (meshio could not parse it" + (f": {why})" if why else ")")
+            ) from exc
+        except (OSError, ValueError) as exc:  # MeshError is a ValueError
+            msg = str(exc)
+            raise MeshError(msg if msg.startswith(str(p)) else f"{p}: {msg}") from exc
+        except (IndexError, KeyError) as exc:  # malformed content (e.g. a file without points)
+            raise MeshError(
+                f"{p}: cannot read mesh (malformed file: {type(exc).__name__}: {exc})"
+            ) from exc
+
+
+def _check_target(path: Path, force: bool, suffixes: Sequence[str] | None) -> Path:
+    """Refuse an unknown file type or an existing file (unless ``force``)."""
+    if suffixes is not None and path.suffix.lower() not in suffixes:
+        kinds = "; ".join(
+            f"{s} ({MESH_SUFFIXES[s]})" if s in MESH_SUFFIXES else s for s in suffixes
+        )
+        raise OutputDirError(
+            f"{path}: unknown file type {path.suffix or '(none)'!r}; expected {kinds}"
+        )
+    if path.is_dir():
+        raise OutputDirError(f"{path} is a directory")
+    if path.exists() and not force:
+        raise OutputDirError(f"{path} exists; use --force to replace it")
+    parent = path.parent
+    if parent.exists() and not parent.is_dir():
+        raise OutputDirError(f"cannot create {path}: {parent} is not a directory")
+    return path
+
+
+@contextlib.contextmanager
+def _atomic_file(path: Path) -> Iterator[Path]:
+    """A temporary file next to ``path`` (same suffix) that replaces it on success."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, name = tempfile.mkstemp(
+            dir=path.parent, prefix=f".{path.stem}.tmp-", suffix=path.suffix
+        )
+    except OSError as exc:
+        raise OutputDirError(f"cannot create {path}: {exc.strerror or exc}") from exc
+    os.close(fd)
+    tmp = Path(name)
+    try:
+        yield tmp
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def save_mesh(mesh: Mesh, path: str | os.PathLike[str], *, force: bool = False) -> Path:
+    """Write a mesh as ``.vtu`` or ``.msh``, atomically.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    path : path
+        ``.vtu`` (any polygons) or ``.msh`` (gmsh 2.2; triangles and quadrilaterals
+        only).
+    force : bool
+        Replace an existing file.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    OutputDirError
+        Unknown suffix, or the file exists and ``force`` is False.
+    MeshError
+        A ``.msh`` file for a mesh with cells of more than four vertices.
+    """
+    p = _check_target(Path(path), force, tuple(MESH_SUFFIXES))
+    if p.suffix.lower() == ".msh":
+        big = sorted(n for n in mesh.groups if n > 4)
+        if big:
+            counts = ", ".join(f"{len(mesh.groups[n][0])} {n}-gons" for n in big)
+            raise MeshError(
+                f"{p}: gmsh files hold triangles and quadrilaterals only, but the "
+                f"mesh has {counts}; write .vtu instead"
+            )
+    with _atomic_file(p) as tmp, _quiet():
+        write_mesh(mesh, tmp)
+    return p
+
+
+# ---------------------------------------------------------------------------- inspection
+def hanging_nodes(mesh: Mesh, rtol: float = 1e-10) -> NDArray[np.int64]:
+    """Vertices lying on a straight side of a cell (interior angle 180 degrees there).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    rtol : float
+        A vertex is straight when ``|e_in x e_out| <= rtol |e_in| |e_out|`` and the
+        two edges point the same way.
+
+    Returns
+    -------
+    (k,) int array
+        Sorted vertex ids.
+    """
+    found = [np.zeros(0, np.int64)]
+    for _n, (_ids, verts) in mesh.groups.items():
+        X = mesh.points[verts]
+        e_in = X - np.roll(X, 1, axis=1)
+        e_out = np.roll(X, -1, axis=1) - X
+        cross = e_in[..., 0] * e_out[..., 1] - e_in[..., 1] * e_out[..., 0]
+        dot = np.sum(e_in * e_out, axis=-1)
+        scale = np.linalg.norm(e_in, axis=-1) * np.linalg.norm(e_out, axis=-1)
+        found.append(verts[(np.abs(cross) <= rtol * scale) & (dot > 0)])
+    return np.unique(np.concatenate(found))
+
+
+def contact_nodes(mesh: Mesh) -> NDArray[np.int64]:
+    """Vertices on the closure of the contact part that are not on the clamped part.
+
+    These carry the contact quadrature and the wear (design note, section 3).
+    """
+    return np.setdiff1d(mesh.part_vertices("contact"), mesh.part_vertices("clamped"))
+
+
+def _try(check: Callable[[], None]) -> str | None:
+    try:
+        check()
+    except MeshError as exc:
+        return str(exc)
+    return None
+
+
+def mesh_summary(mesh: Mesh, *, quality: bool = True) -> dict[str, Any]:
+    """Counts, validity and A1 quality of a mesh (what ``vemwear mesh inspect`` shows).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    quality : bool
+        Also compute :func:`vemwear.mesh.quality_report` (only for meshes whose cells
+        are valid).
+
+    Returns
+    -------
+    dict
+        JSON-ready: ``points``, ``cells``, ``cells_by_vertices`` (``{n: count}``),
+        ``h``, ``area``, ``boundary_edges`` (per part and ``untagged``),
+        ``contact_nodes``, ``hanging_nodes``, ``valid`` and ``error`` (the first
+        failed check of vertices, cells and conformity), ``boundary_error`` (untagged
+        edges or a missing clamped/contact part; None if complete), and with
+        ``quality`` the A1 statistics ``quality`` (``{quantity: [min, mean, max]}``,
+        ``gamma1``, ``gamma2``, ``convex``, ``not_star_shaped``, ``warnings``). The
+        :class:`~vemwear.mesh.QualityReport` itself is under the key ``_report``.
+    """
+    tags = mesh.boundary_tags
+    error = None
+    for check in (check_vertices, check_cells, check_conforming):
+        error = _try(lambda c=check: c(mesh))
+        if error is not None:
+            break
+    out: dict[str, Any] = {
+        "points": mesh.n_points,
+        "cells": mesh.n_cells,
+        "cells_by_vertices": {int(n): len(ids) for n, (ids, _v) in sorted(mesh.groups.items())},
+        "h": float(mesh.h),
+        "area": float(np.sum(mesh.cell_areas)),
+        "boundary_edges": {
+            **{p: int(np.sum(tags == part_code(p))) for p in PARTS},
+            "untagged": int(np.sum(tags == 0)),
+        },
+        "contact_nodes": len(contact_nodes(mesh)),
+        "hanging_nodes": len(hanging_nodes(mesh)),
+        "valid": error is None,
+        "error": error,
+        "boundary_error": _try(lambda: check_boundary(mesh, ("clamped", "contact"))),
+    }
+    if quality and error is None:
+        rep = quality_report(mesh)
+        out["quality"] = {
+            "summary": {k: list(v) for k, v in rep.summary().items()},
+            "gamma1": rep.gamma1,
+            "gamma2": rep.gamma2,
+            "convex": int(np.sum(rep.convex)),
+            "not_star_shaped": int(np.sum(~rep.star_shaped)),
+            "warnings": list(rep.warnings),
+        }
+        out["_report"] = rep
+    return out
+
+
+def _ngons(counts: Mapping[int, int]) -> str:
+    return ", ".join(f"{n}-gons {c}" for n, c in counts.items())
+
+
+def _inspect_text(source: str, s: Mapping[str, Any]) -> str:
+    from .main import PROG, _rows
+
+    b = s["boundary_edges"]
+    rows = [
+        ("points", str(s["points"])),
+        ("cells", f"{s['cells']} ({_ngons(s['cells_by_vertices'])})"),
+        ("size", f"h = {s['h']:.4g} (largest cell diameter), area {s['area']:.6g}"),
+        ("boundary edges", f"{sum(b.values())}: " + ", ".join(f"{k} {v}" for k, v in b.items())),
+        ("contact nodes", f"{s['contact_nodes']} (vertices on Gamma_C, not on Gamma_D)"),
+        ("hanging nodes", f"{s['hanging_nodes']} (vertices on a straight side of a cell)"),
+        (
+            "validity",
+            "valid (vertices, cells, conformity)" if s["valid"] else f"INVALID: {s['error']}",
+        ),
+        (
+            "boundary parts",
+            "complete (every edge tagged, clamped and contact present)"
+            if s["boundary_error"] is None
+            else f"incomplete: {s['boundary_error']}",
+        ),
+    ]
+    head = f"{PROG}: {source}: {'valid' if s['valid'] else 'INVALID'} mesh"
+    text = head + "\n" + _rows(rows)
+    if "_report" in s:
+        text += "\n" + str(s["_report"])
+    return text
+
+
+# ---------------------------------------------------------------------------- plotting
+def plot_mesh(
+    mesh: Mesh,
+    path: str | os.PathLike[str] | None = None,
+    *,
+    quality: bool | QualityReport = False,
+    title: str | None = None,
+) -> Figure:
+    """Draw a mesh with its boundary parts coloured (and optionally ``rho_K / h_K``).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    path : path, optional
+        Save the figure there (format from the suffix, 150 dpi).
+    quality : bool or QualityReport
+        Colour every cell by ``rho_K / h_K`` of assumption A1 (a report may be
+        passed to avoid recomputing it).
+    title : str, optional
+        Default: cell counts and mesh size.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.collections import LineCollection, PolyCollection
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
+    P = mesh.points
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    ext = np.maximum(hi - lo, 1e-300)
+    aspect = float(ext[1] / ext[0])
+    width = 9.0
+    fig = Figure(
+        figsize=(width, min(max((width - 2.0) * aspect, 2.0), 9.0) + 1.6), layout="constrained"
+    )
+    ax = fig.subplots()
+    lw = float(np.clip(12.0 / np.sqrt(max(mesh.n_cells, 1)), 0.1, 0.8))
+    polys = PolyCollection([P[c] for c in mesh.cells], closed=True, linewidths=lw)
+    if quality is not False:
+        rep = quality if not isinstance(quality, bool) else quality_report(mesh)
+        polys.set_array(rep.rho_ratio)
+        polys.set_cmap("viridis")
+        polys.set_clim(0.0, max(0.5, float(rep.rho_ratio.max())))
+        polys.set_edgecolor("0.25")
+        ax.add_collection(polys)
+        cb = fig.colorbar(polys, ax=ax, shrink=0.9, pad=0.02)
+        cb.set_label(r"$\rho_K / h_K$ (assumption A1)")
+        extra = (
+            f"; $\\gamma_1$ = min $\\rho_K/h_K$ = {rep.gamma1:.3g}, $\\gamma_2$ = {rep.gamma2:.3g}"
+        )
+    else:
+        polys.set_facecolor("#f2f2f2")
+        polys.set_edgecolor("0.35")
+        ax.add_collection(polys)
+        extra = ""
+    handles = []
+    be = mesh.boundary_edges
+    for name in (*PARTS, "untagged"):
+        code = 0 if name == "untagged" else part_code(name)
+        sel = mesh.boundary_tags == code
+        if not np.any(sel):
+            continue
+        ax.add_collection(
+            LineCollection(
+                P[be[sel]],
+                colors=PART_COLORS[name],
+                linewidths=3.0,
+                linestyles="--" if name == "untagged" else "-",
+                capstyle="butt",
+                zorder=3,
+            )
+        )
+        label = f"{name} {PART_SYMBOLS.get(name, '')} ({int(sel.sum())} edges)"
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color=PART_COLORS[name],
+                lw=3.0,
+                ls="--" if name == "untagged" else "-",
+                label=label,
+            )
+        )
+    hang = hanging_nodes(mesh)
+    if hang.size:
+        ax.plot(P[hang, 0], P[hang, 1], "o", ms=3.0, mfc="white", mec="k", mew=0.7, zorder=4)
+        handles.append(
+            Line2D(
+                [],
+                [],
+                ls="",
+                marker="o",
+                ms=4.0,
+                mfc="white",
+                mec="k",
+                label=f"hanging nodes ({hang.size})",
+            )
+        )
+    pad = 0.02 * float(ext.max())
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel(r"$x_1$")
+    ax.set_ylabel(r"$x_2$")
+    if handles:
+        fig.legend(
+            handles=handles,
+            loc="outside lower center",
+            ncols=min(len(handles), 4),
+            frameon=False,
+            fontsize="small",
+        )
+    if title is None:
+        counts = ", ".join(f"{len(i)} {n}-gons" for n, (i, _v) in sorted(mesh.groups.items()))
+        title = f"{mesh.n_cells} cells ({counts}), {mesh.n_points} vertices, h = {mesh.h:.3g}"
+    ax.set_title(title + extra, fontsize="medium")
+    if path is not None:
+        fig.savefig(path, dpi=150)
+    return fig
+
+
+# ---------------------------------------------------------------------------- commands
+def cmd_generate(args: argparse.Namespace) -> int:
+    """``vemwear mesh generate FAMILY -o FILE``."""
+    from .main import EXIT_OK, PROG
+
+    out = _check_target(Path(args.output), args.force, tuple(MESH_SUFFIXES))
+    params = dict(_parse_param(t) for t in args.param or ())
+    mesh = generate_mesh(
+        args.family,
+        size=args.size,
+        cells=args.cells,
+        divisions=args.divisions,
+        seed=args.seed,
+        params=params,
+        refine_contact=args.refine_contact,
+        boundary=args.boundary,
+    )
+    for check in (check_vertices, check_cells, check_conforming):
+        check(mesh)
+    save_mesh(mesh, out, force=args.force)
+    tags = mesh.boundary_tags
+    parts = ", ".join(f"{p} {int(np.sum(tags == part_code(p)))}" for p in PARTS)
+    counts = _ngons({n: len(i) for n, (i, _v) in sorted(mesh.groups.items())})
+    print(
+        f"{PROG}: mesh generate {args.family}: wrote {out}\n"
+        f"  {mesh.n_cells} cells ({counts}), {mesh.n_points} vertices, h = {mesh.h:.4g}; "
+        f"boundary edges: {parts if np.any(tags) else 'untagged'}; "
+        f"hanging nodes {len(hanging_nodes(mesh))}"
+    )
+    return EXIT_OK
+
+
+def cmd_inspect(args: argparse.Namespace) -> int:
+    """``vemwear mesh inspect FILE_OR_CONFIG``: counts, validity, A1 quality."""
+    from .main import EXIT_INPUT, EXIT_OK, PROG
+
+    mesh = load_mesh(args.file)
+    s = mesh_summary(mesh)
+    if args.json:
+        print(json.dumps({k: v for k, v in s.items() if not k.startswith("_")}, indent=2))
+    else:
+        print(_inspect_text(args.file, s))
+    if not s["valid"]:
+        print(
+            f"{PROG}: error: {args.file}: invalid mesh: {s['error']}", file=sys.stderr, flush=True
+        )
+        return EXIT_INPUT
+    return EXIT_OK
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    """``vemwear mesh plot FILE -o PNG [--quality]``."""
+    from matplotlib.figure import Figure
+
+    from .main import EXIT_OK, PROG
+
+    types = tuple(f".{s}" for s in Figure().canvas.get_supported_filetypes())
+    out = _check_target(Path(args.output), args.force, types)
+    mesh = load_mesh(args.file)
+    if args.quality:
+        check_cells(mesh)  # the kernel disks need counter-clockwise simple cells
+    fig = plot_mesh(
+        mesh,
+        quality=args.quality,
+        title=f"{Path(args.file).name}: "
+        f"{mesh.n_cells} cells, {mesh.n_points} vertices, h = {mesh.h:.3g}",
+    )
+    with _atomic_file(out) as tmp:
+        fig.savefig(tmp, dpi=150, format=out.suffix[1:].lower())
+    print(f"{PROG}: mesh plot: wrote {out}")
+    return EXIT_OK
+
+
+def cmd_convert(args: argparse.Namespace) -> int:
+    """``vemwear mesh convert IN OUT``."""
+    from .main import EXIT_OK, PROG
+
+    if Path(args.output).resolve() == Path(args.input).resolve():
+        raise OutputDirError(f"{args.output}: input and output are the same file")
+    out = _check_target(Path(args.output), args.force, tuple(MESH_SUFFIXES))
+    mesh = load_mesh(args.input)
+    save_mesh(mesh, out, force=args.force)
+    print(f"{PROG}: mesh convert: wrote {out} ({mesh.n_cells} cells, {mesh.n_points} vertices)")
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------- parser
+def _family_listing() -> str:
+    return "families:\n" + "\n".join(f"  {f.name:<11}{f.description}" for f in FAMILIES.values())
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
+    """Add ``vemwear mesh`` and its subcommands to the ``vemwear`` subparsers.
+
+    Parameters
+    ----------
+    sub
+        The object returned by ``parser.add_subparsers()`` in
+        :func:`vemwear.cli.main.build_parser`.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``mesh`` parser.
+    """
+    from .main import EPILOG, _formatter
+
+    def debug(p: argparse.ArgumentParser) -> None:
+        p.add_argument("--debug", action="store_true", help="print the full traceback on errors")
+
+    d = "Generate, inspect, plot and convert polygonal meshes."
+    mesh_p = sub.add_parser(
+        "mesh", help=d, description=d, epilog=EPILOG, formatter_class=_formatter
+    )
+    msub = mesh_p.add_subparsers(dest="mesh_command", metavar="SUBCOMMAND", title="subcommands")
+    msub.required = True
+
+    d = (
+        "Generate a mesh of a rectangle, tag the paper's boundary parts (clamped left, "
+        "traction top and right, contact bottom) and write it as .vtu or .msh."
+    )
+    p = msub.add_parser(
+        "generate",
+        help=d,
+        description=d + "\n\n" + _family_listing(),
+        epilog=EPILOG,
+        formatter_class=_formatter,
+    )
+    p.add_argument(
+        "family",
+        metavar="FAMILY",
+        choices=list(FAMILIES),
+        help="mesh family: " + ", ".join(FAMILIES),
+    )
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="FILE",
+        help="output file: .vtu (any polygons) or .msh (gmsh 2.2, triangles and "
+        "quadrilaterals only)",
+    )
+    p.add_argument(
+        "--size",
+        nargs=2,
+        type=float,
+        default=(2.0, 1.0),
+        metavar=("LX", "LY"),
+        help="side lengths of the rectangle [0, LX] x [0, LY] (default: 2 1)",
+    )
+    g = p.add_mutually_exclusive_group()
+    g.add_argument(
+        "--cells",
+        type=int,
+        metavar="N",
+        help="number of cells: exact for voronoi; for squares, triangles, "
+        "distorted and nonconvex the grid closest to square cells",
+    )
+    g.add_argument(
+        "--divisions",
+        nargs=2,
+        type=int,
+        metavar=("NX", "NY"),
+        help="grid divisions (not for voronoi); default: the family's own",
+    )
+    p.add_argument(
+        "--seed",
+        type=int,
+        metavar="S",
+        help="random seed (voronoi, distorted, hanging with pattern=random)",
+    )
+    p.add_argument(
+        "--param",
+        action="append",
+        metavar="NAME=VALUE",
+        help="further argument of the generator, repeatable, e.g. amplitude=0.1 "
+        "(distorted), pattern=random (hanging), diagonal=alternate "
+        "(triangles), depth=0.3 (nonconvex), lloyd_iterations=10 (voronoi)",
+    )
+    p.add_argument(
+        "--refine-contact",
+        type=int,
+        default=0,
+        metavar="LEVELS",
+        help="refine the cells along the contact part LEVELS times (hanging nodes; default 0)",
+    )
+    p.add_argument(
+        "--boundary",
+        choices=("paper", "none"),
+        default="paper",
+        help="boundary parts: paper (default: clamped left, traction top and "
+        "right, contact bottom) or none (untagged)",
+    )
+    p.add_argument("--force", action="store_true", help="replace an existing FILE")
+    debug(p)
+    p.set_defaults(func=cmd_generate)
+
+    d = (
+        "Show the counts (points, cells by vertex count, boundary edges per part, contact "
+        "and hanging nodes), the validity and the quality (assumption A1) of a mesh. "
+        "Exit code 2 if the mesh is invalid."
+    )
+    p = msub.add_parser("inspect", help=d, description=d, epilog=EPILOG, formatter_class=_formatter)
+    p.add_argument(
+        "file",
+        metavar="FILE_OR_CONFIG",
+        help="mesh file (.vtu, .msh, ...) or configuration file (.toml)",
+    )
+    p.add_argument("--json", action="store_true", help="print the numbers as JSON")
+    debug(p)
+    p.set_defaults(func=cmd_inspect)
+
+    d = (
+        "Draw a mesh with its boundary parts coloured and hanging nodes marked; with "
+        "--quality, every cell coloured by rho_K / h_K (assumption A1)."
+    )
+    p = msub.add_parser("plot", help=d, description=d, epilog=EPILOG, formatter_class=_formatter)
+    p.add_argument(
+        "file",
+        metavar="FILE_OR_CONFIG",
+        help="mesh file (.vtu, .msh, ...) or configuration file (.toml)",
+    )
+    p.add_argument(
+        "-o", "--output", required=True, metavar="PNG", help="image file (.png, .pdf, .svg, ...)"
+    )
+    p.add_argument("--quality", action="store_true", help="colour cells by rho_K / h_K")
+    p.add_argument("--force", action="store_true", help="replace an existing image")
+    debug(p)
+    p.set_defaults(func=cmd_plot)
+
+    d = "Read a mesh (or build the mesh of a configuration file) and write it as .vtu or .msh."
+    p = msub.add_parser("convert", help=d, description=d, epilog=EPILOG, formatter_class=_formatter)
+    p.add_argument("input", metavar="IN", help="mesh file or configuration file (.toml)")
+    p.add_argument("output", metavar="OUT", help="output file: .vtu or .msh")
+    p.add_argument("--force", action="store_true", help="replace an existing OUT")
+    debug(p)
+    p.set_defaults(func=cmd_convert)
+    return mesh_p
