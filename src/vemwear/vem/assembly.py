@@ -33,13 +33,14 @@ def stiffness(mesh: Mesh, material: Material, stabilization: str = "paper") -> s
     scattered once into a COO matrix.
     """
     rows, cols, vals = [], [], []
+    ndof = 2 * mesh.n_points
+    index = np.int32 if ndof < 2**31 - 1 else np.int64  # less memory traffic in the scatter
     for _n, (_ids, verts) in mesh.groups.items():
         K, _B, _P, _a = element_matrices(mesh.points[verts], material, stabilization)
-        d = _dofs(verts)
+        d = _dofs(verts).astype(index)
         rows.append(np.repeat(d, d.shape[1], axis=1).ravel())
         cols.append(np.tile(d, (1, d.shape[1])).ravel())
         vals.append(K.ravel())
-    ndof = 2 * mesh.n_points
     A = sp.coo_matrix(
         (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(ndof, ndof)
     ).tocsr()
