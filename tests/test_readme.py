@@ -18,3 +18,13 @@ def test_readme_python_example_runs(tmp_path, monkeypatch):
     assert result.residuals.max() <= 1e-10
     assert (tmp_path / "out" / "result.npz").exists()
     assert (tmp_path / "out" / "profiles.png").stat().st_size > 0
+
+
+def test_readme_config_example_is_valid(tmp_path):
+    from vemwear.cli.main import main
+
+    blocks = re.findall(r"```toml\n(.*?)```", README.read_text(), re.S)
+    assert blocks, "the README has no config example"
+    cfg = tmp_path / "readme.toml"
+    cfg.write_text(blocks[0])
+    assert main(["check", str(cfg)]) == 0
