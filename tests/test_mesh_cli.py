@@ -420,3 +420,15 @@ def test_hanging_and_contact_nodes() -> None:
     # every hanging node is a side midpoint of a split cell, inside the domain
     assert np.all((P[h, 0] > 0) & (P[h, 0] < 2) & (P[h, 1] > 0) & (P[h, 1] < 1))
     assert len(h) == 10  # 16 side midpoints of the 4 split cells, 6 on the boundary
+
+
+def test_config_and_cli_share_family_names(tmp_path):
+    """Every short name of ``vemwear mesh generate`` also works in a config."""
+    from vemwear.cli.config import mesh_families
+    from vemwear.cli.mesh_cmd import FAMILIES
+    from vemwear.mesh import GENERATORS
+
+    assert set(FAMILIES) == set(GENERATORS)
+    fams = mesh_families()
+    for name, fn in GENERATORS.items():
+        assert fams[name] is fn, name

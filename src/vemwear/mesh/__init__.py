@@ -24,6 +24,7 @@ from .voronoi import (
 )
 
 __all__ = [
+    "GENERATORS",
     "PARTS",
     "Mesh",
     "MeshError",
@@ -54,3 +55,15 @@ __all__ = [
     "voronoi_mesh",
     "write_mesh",
 ]
+
+#: Mesh families by the short names that configs (``[mesh] generator = NAME``) and
+#: ``vemwear mesh generate NAME`` share; configs also accept the function names.
+GENERATORS = {
+    "squares": rectangle_squares,
+    "triangles": rectangle_triangles,
+    "voronoi": rectangle_voronoi,
+    "distorted": distorted_quads,
+    "hexagons": hexagons,
+    "nonconvex": nonconvex_mesh,
+    "hanging": squares_with_hanging_nodes,
+}
