@@ -105,23 +105,23 @@ def check_conforming(mesh: Mesh, rtol: float = 1e-9) -> None:
     tree = cKDTree(mesh.points[bv])
     tol = rtol * _scale(mesh)
     hits = tree.query_ball_point(mid, half * (1 - 1e-9))
-    for e, cand in enumerate(hits):  # few candidates per edge; only boundary edges
-        if not cand:
-            continue
-        c = bv[np.asarray(cand)]
-        c = c[(c != be[e, 0]) & (c != be[e, 1])]
-        if c.size == 0:
-            continue
-        d = b[e] - a[e]
-        r = mesh.points[c] - a[e]
-        dist = np.abs(r[:, 0] * d[1] - r[:, 1] * d[0]) / (2 * half[e])
-        if np.any(dist <= tol):
-            v = c[dist <= tol][0]
-            cell = mesh.boundary_edge_cells[e]
-            raise MeshError(
-                f"non-conforming edge ({be[e, 0]}, {be[e, 1]}) of cell {cell}: vertex {v} lies "
-                "on it but is not a vertex of that cell (add hanging nodes to the cell's list)"
-            )
+    # (edge, candidate vertex) pairs, all at once: boundary vertices near each edge
+    counts = np.fromiter((len(h) for h in hits), dtype=np.int64, count=len(hits))
+    e = np.repeat(np.arange(len(be)), counts)
+    c = bv[np.fromiter((i for h in hits for i in h), dtype=np.int64, count=int(counts.sum()))]
+    keep = (c != be[e, 0]) & (c != be[e, 1])
+    e, c = e[keep], c[keep]
+    d = b[e] - a[e]
+    r = mesh.points[c] - a[e]
+    dist = np.abs(r[:, 0] * d[:, 1] - r[:, 1] * d[:, 0]) / (2 * half[e])
+    on_edge = np.flatnonzero(dist <= tol)
+    if on_edge.size:
+        k = on_edge[0]
+        ek, v, cell = e[k], c[k], mesh.boundary_edge_cells[e[k]]
+        raise MeshError(
+            f"non-conforming edge ({be[ek, 0]}, {be[ek, 1]}) of cell {cell}: vertex {v} lies "
+            "on it but is not a vertex of that cell (add hanging nodes to the cell's list)"
+        )
     _check_nested_pieces(mesh)  # last: the messages above are more specific
 
 
