@@ -34,6 +34,8 @@ def test_resume_equals_uninterrupted_run(method, store, level):
     part = info.value.partial_result
     assert part.is_partial and 0 <= part.completed <= level
     assert np.all(part.u_levels < part.completed)
+    for k in ("wear", "u_nu", "lam", "p", "iterations", "residuals"):
+        assert not np.any(getattr(part, k)[part.completed :]), k  # unfinished levels are zero
     resumed = simulate(pr, opts, store=store, recover_block=4, resume=part)
     ref = simulate(pr, opts, store=store, recover_block=4)
     assert not resumed.is_partial

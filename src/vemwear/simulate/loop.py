@@ -275,9 +275,16 @@ def simulate(
 
 
 def _truncate(r: Result) -> Result:
-    """The partial result: levels ``< completed`` are valid, the rest zero."""
-    keep = r.u_levels < r.completed
-    return replace(r, u=r.u[keep].copy(), u_levels=r.u_levels[keep].copy())
+    """The partial result: levels ``< completed`` are kept, the later ones set to zero
+    (a level whose displacement block was not recovered yet may hold values)."""
+    c = r.completed
+    keep = r.u_levels < c
+    arrays = {
+        k: getattr(r, k).copy() for k in ("wear", "u_nu", "lam", "p", "iterations", "residuals")
+    }
+    for a in arrays.values():
+        a[c:] = 0
+    return replace(r, u=r.u[keep].copy(), u_levels=r.u_levels[keep].copy(), **arrays)
 
 
 def _restart(

@@ -12,10 +12,15 @@ factors give the Schur complement (:class:`SchurFactor`).
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
+
+from .ordering import nested_dissection
 
 BACKENDS = ("auto", "scipy", "pardiso")
 
@@ -81,14 +86,21 @@ def resolve_backend(backend: str = "auto", size: int = 0, many_factorizations: b
     return backend
 
 
-def factorize(A: sp.spmatrix, backend: str = "auto", many_factorizations: bool = False):
-    """Factorize a sparse matrix once; the result solves for any number of right-hand sides."""
+def factorize(
+    A: sp.spmatrix,
+    backend: str = "auto",
+    *,
+    symmetric: bool = True,
+    many_factorizations: bool = False,
+):
+    """Factorize a sparse matrix once; the result solves for any number of right-hand sides.
+
+    ``symmetric`` lets SuperLU use its symmetric mode (SPD matrices); PARDISO always
+    factorizes as a general matrix. ``many_factorizations`` tells ``"auto"`` that the
+    caller factorizes again and again (see :func:`resolve_backend`).
+    """
     chosen = resolve_backend(backend, A.shape[0], many_factorizations)
-    return (
-        PardisoFactor(A)
-        if chosen == "pardiso"
-        else SuperLUFactor(A, symmetric=not many_factorizations)
-    )
+    return PardisoFactor(A) if chosen == "pardiso" else SuperLUFactor(A, symmetric=symmetric)
 
 
 class SchurFactor:
@@ -112,10 +124,6 @@ class SchurFactor:
     def __init__(
         self, K: sp.spmatrix, last: NDArray[np.int64], points: NDArray[np.float64]
     ) -> None:
-        import time
-
-        from .ordering import nested_dissection
-
         tick = time.perf_counter()
         self.timings: dict[str, float] = {}
         n = K.shape[0]
@@ -159,8 +167,6 @@ class SchurFactor:
             U22 = self.lu.U[:, n - c :][n - c :].toarray()
             S = U22.T @ (U22 / np.diag(U22)[:, None])
             S = 0.5 * (S + S.T)
-            import scipy.linalg as sla
-
             self.S_inv = sla.cho_solve(sla.cho_factor(S), np.eye(c))
         self.timings["schur"] = time.perf_counter() - tick
         self.n = n

@@ -30,19 +30,19 @@ from .system import (
     StepData,
     StepSolution,
     check_converged,
+    condensed_residuals,
     kkt_residuals,
 )
 
 
 @dataclass(frozen=True)
 class NewtonOptions:
-    """Tolerance on the scaled KKT residuals, iteration limit, linear-algebra backend,
-    and how many right-hand sides the condensation solves at a time."""
+    """Tolerance on the scaled KKT residuals, iteration limit, linear-algebra backend
+    (the condensed solver always uses SuperLU, whose factors give the Schur complement)."""
 
     tol: float = 1e-10
     max_iter: int = 100
     backend: str = "auto"
-    block: int = 256
 
 
 def _reduced_matrix(J11, J12, active):
@@ -84,42 +84,25 @@ class CondensedNewton:
         self.system = system
         self.options = options or NewtonOptions()
         m = system.m
-        if system.dof_points is not None:
-            # one factorization whose trailing block is the Schur complement on Gamma_C
-            self.factor = SchurFactor(system.K, system.contact_dofs.ravel(), system.dof_points)
-            C = self.factor.S_inv.reshape(m, 2, m, 2)  # block of K^{-1} on the contact dofs
-            nu, tau = system.normals, system.tangents
-            self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
-            self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
-        else:  # no geometry for the ordering: K^{-1} G^T by blocks of solves
-            self.factor = factorize(system.K, self.options.backend)
-            G = sp.vstack([system.N, system.Tau]).tocsc()  # (2m, nf)
-            Cg = np.empty((2 * m, 2 * m))
-            for start in range(0, 2 * m, self.options.block):
-                stop = min(start + self.options.block, 2 * m)
-                Cg[:, start:stop] = G @ self.factor.solve(G[start:stop].T.toarray())
-            self.C_NN, self.C_NT = Cg[:m, :m], Cg[:m, m:]
+        # one factorization whose trailing block is the Schur complement on Gamma_C
+        self.factor = SchurFactor(system.K, system.contact_dofs.ravel(), system.dof_points)
+        C = self.factor.S_inv.reshape(m, 2, m, 2)  # block of K^{-1} on the contact dofs
+        nu, tau = system.normals, system.tangents
+        self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
+        self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
         self.A_norm = self.C_NN * system.omega[None, :]
         self._eye = np.eye(m)
         self._lu_cache: dict[bytes, tuple] = {}
         self._fric_key: bytes | None = None
         self._F: NDArray | None = None
-        self._uF: NDArray | None = None
         self._d: NDArray | None = None
 
-    def _displacement_of_load(self, F: NDArray) -> tuple[NDArray, NDArray]:
+    def _normal_displacement_of_load(self, F: NDArray) -> NDArray:
+        """``d = N K^{-1} F``, recomputed only when the load changes."""
         if self._F is None or not np.array_equal(F, self._F):
             self._F = np.array(F, copy=True)
-            self._uF = self.factor.solve(self._F)
-            self._d = self.system.N @ self._uF
-        return self._uF, self._d  # type: ignore[return-value]
-
-    def recover(self, step: StepData, lam: NDArray, pa: NDArray) -> NDArray:
-        """Full displacement from the contact pressures (one back-substitution)."""
-        s = self.system
-        uF, _ = self._displacement_of_load(step.F)
-        f = s.N.T @ (s.omega * (pa + lam)) + s.Tau.T @ (s.omega * step.fric * pa)
-        return uF - self.factor.solve(f)
+            self._d = self.system.N @ self.factor.solve(self._F)
+        return self._d  # type: ignore[return-value]
 
     def recover_many(
         self, steps: list[StepData], lams: list[NDArray], ps: list[NDArray]
@@ -128,7 +111,7 @@ class CondensedNewton:
         s = self.system
         rhs = np.column_stack(
             [
-                st.F - s.N.T @ (s.omega * (pa + lam)) - s.Tau.T @ (s.omega * st.fric * pa)
+                st.F - s.layer_forces(lam, pa, st.fric)
                 for st, lam, pa in zip(steps, lams, ps, strict=True)
             ]
         )
@@ -143,7 +126,7 @@ class CondensedNewton:
         :meth:`recover_many` computes it later for several levels at once.
         """
         s, opt = self.system, self.options
-        _, d = self._displacement_of_load(step.F)
+        d = self._normal_displacement_of_load(step.F)
         if guess is not None:
             y, lam = np.array(guess.u_nu, copy=True), np.array(guess.lam, copy=True)
         else:
@@ -159,7 +142,7 @@ class CondensedNewton:
             r = y - step.w
             pa, dp = s.p(r), s.p.derivative(r)
             R = y - d + A_norm @ (pa + lam) + A_fric @ pa
-            res = _condensed_residuals(s, y, lam, R)
+            res = condensed_residuals(s, y, lam, R)
             if max(res.values()) <= 0.1 * opt.tol or it == opt.max_iter:
                 break
             it += 1
@@ -178,24 +161,11 @@ class CondensedNewton:
         pa = s.p(y - step.w)
         u = None
         if recover:
-            u = self.recover(step, lam, pa)
+            u = self.recover_many([step], [lam], [pa])[:, 0]
             res = kkt_residuals(s, step, u, lam)
             y = s.N @ u
         check_converged(res, opt.tol, step, "semismooth Newton (condensed)", it)
         return StepSolution(u=u, u_nu=y, lam=lam, p=pa, iterations=it, residuals=res)
-
-
-def _condensed_residuals(s: ContactSystem, y, lam, R) -> dict[str, float]:
-    tiny = np.finfo(float).tiny
-    g_ref = max(float(np.abs(s.g).max()), tiny)
-    lam_ref = max(float(np.abs(lam).max(initial=0)), tiny)
-    return {
-        "equilibrium": float(np.abs(R).max(initial=0) / g_ref),
-        "feasibility": float(max(0.0, (y - s.g).max(initial=0)) / g_ref),
-        "complementarity": float(
-            np.abs(np.minimum(lam / lam_ref, (s.g - y) / g_ref)).max(initial=0)
-        ),
-    }
 
 
 class FullNewton:
@@ -224,14 +194,14 @@ class FullNewton:
             active = lam + s.c_ncp * (y - s.g) > 0
             J = s.K + N.T @ sp.diags(om * dp) @ N + Tau.T @ sp.diags(om * step.fric * dp) @ N
             # residual without the rigid-layer term: lam_new enters the system directly
-            r0 = s.K @ u - step.F + N.T @ (om * pa) + Tau.T @ (om * step.fric * pa)
-            NA = N[np.flatnonzero(active)]
-            nA = NA.shape[0]
-            M = sp.bmat([[J, NA.T @ sp.diags(om[active])], [NA, None]], format="csc")
-            rhs = np.concatenate([-r0, s.g[active] - NA @ u])
-            if nA == 0:
+            r0 = s.K @ u - step.F + s.layer_forces(0.0, pa, step.fric)
+            if np.any(active):  # saddle point with the active constraints N_A u = g_A
+                NA = N[np.flatnonzero(active)]
+                M = sp.bmat([[J, NA.T @ sp.diags(om[active])], [NA, None]], format="csc")
+                rhs = np.concatenate([-r0, s.g[active] - NA @ u])
+            else:
                 M, rhs = sp.csc_matrix(J), -r0
-            sol = factorize(M, opt.backend, many_factorizations=True).solve(rhs)
+            sol = factorize(M, opt.backend, symmetric=False, many_factorizations=True).solve(rhs)
             du = sol[: s.n_free]
             lam_new = np.zeros(s.m)
             lam_new[active] = sol[s.n_free :]

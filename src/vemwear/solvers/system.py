@@ -37,7 +37,8 @@ class ContactSystem:
     omega : (m,) nodal weights
     g : (m,) thickness of the soft layer (bound on ``N u``)
     p : the compliance law
-    dof_points : (nf, 2) coordinates of the vertex of each free dof (for orderings), optional
+    dof_points : (nf, 2) coordinates of the vertex of each free dof (for the ordering
+        of the factorization)
     """
 
     K: sp.csr_matrix
@@ -47,7 +48,7 @@ class ContactSystem:
     omega: NDArray[np.float64]
     g: NDArray[np.float64]
     p: ComplianceLaw
-    dof_points: NDArray[np.float64] | None = None
+    dof_points: NDArray[np.float64]
     N: sp.csr_matrix = field(init=False, repr=False)
     Tau: sp.csr_matrix = field(init=False, repr=False)
     c_ncp: NDArray[np.float64] = field(init=False, repr=False)
@@ -73,11 +74,15 @@ class ContactSystem:
     def n_free(self) -> int:
         return self.K.shape[0]
 
+    def layer_forces(self, lam: NDArray, pa: NDArray, fric: NDArray) -> NDArray:
+        """Nodal forces of the rigid and the soft layer,
+        ``N^T(omega (p + lam)) + Tau^T(omega fric p)``, for the pressures lam and p."""
+        return self.N.T @ (self.omega * (pa + lam)) + self.Tau.T @ (self.omega * fric * pa)
+
     def contact_force(self, u: NDArray, lam: NDArray, fric: NDArray, w: NDArray):
         """The contact term of the residual and the soft-layer pressure at ``u``."""
         pa = self.p(self.N @ u - w)
-        force = self.N.T @ (self.omega * (pa + lam)) + self.Tau.T @ (self.omega * fric * pa)
-        return force, pa
+        return self.layer_forces(lam, pa, fric), pa
 
 
 @dataclass(frozen=True)
@@ -103,6 +108,19 @@ class StepSolution:
     residuals: dict[str, float]
 
 
+def _residuals(
+    system: ContactSystem, y: NDArray, lam: NDArray, equilibrium: float, lam_ref: float
+) -> dict[str, float]:
+    """The three residuals, given the scaled equilibrium residual and the pressure scale."""
+    g_ref = max(float(np.abs(system.g).max()), np.finfo(float).tiny)
+    ncp = np.minimum(lam / lam_ref, (system.g - y) / g_ref)
+    return {
+        "equilibrium": float(equilibrium),
+        "feasibility": float(max(0.0, (y - system.g).max(initial=0)) / g_ref),
+        "complementarity": float(np.abs(ncp).max(initial=0)),
+    }
+
+
 def kkt_residuals(
     system: ContactSystem, step: StepData, u: NDArray, lam: NDArray
 ) -> dict[str, float]:
@@ -113,7 +131,6 @@ def kkt_residuals(
     ``complementarity``: ``max |min(lam / lam_ref, (g - N u) / g_ref)|`` (it is zero
     exactly when lam >= 0, N u <= g and lam (N u - g) = 0).
     """
-    y = system.N @ u
     force, pa = system.contact_force(u, lam, step.fric, step.w)
     Ku = system.K @ u
     r = Ku - step.F + force
@@ -121,14 +138,19 @@ def kkt_residuals(
     fscale = max(
         np.abs(step.F).max(initial=0), np.abs(Ku).max(initial=0), np.abs(force).max(initial=0), tiny
     )
-    g_ref = max(float(np.abs(system.g).max()), tiny)
     lam_ref = max(float(np.abs(lam).max(initial=0)), float(np.abs(pa).max(initial=0)), tiny)
-    ncp = np.minimum(lam / lam_ref, (system.g - y) / g_ref)
-    return {
-        "equilibrium": float(np.abs(r).max(initial=0) / fscale),
-        "feasibility": float(max(0.0, (y - system.g).max(initial=0)) / g_ref),
-        "complementarity": float(np.abs(ncp).max(initial=0)),
-    }
+    return _residuals(system, system.N @ u, lam, np.abs(r).max(initial=0) / fscale, lam_ref)
+
+
+def condensed_residuals(
+    system: ContactSystem, y: NDArray, lam: NDArray, R: NDArray
+) -> dict[str, float]:
+    """The residuals of the condensed equations ``R(y, lam) = 0`` (R in displacement
+    units, scaled by max g) with the complementarity conditions on y = N u."""
+    tiny = np.finfo(float).tiny
+    g_ref = max(float(np.abs(system.g).max()), tiny)
+    lam_ref = max(float(np.abs(lam).max(initial=0)), tiny)
+    return _residuals(system, y, lam, np.abs(R).max(initial=0) / g_ref, lam_ref)
 
 
 def check_converged(

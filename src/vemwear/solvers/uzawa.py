@@ -73,7 +73,6 @@ class Uzawa:
         self, step: StepData, guess: StepSolution | None = None, recover: bool = True
     ) -> StepSolution:
         s, opt = self.system, self.options
-        om = s.omega
         if guess is not None:
             lam, q = np.array(guess.lam, copy=True), np.array(guess.p, copy=True)
         else:
@@ -82,9 +81,7 @@ class Uzawa:
         res: dict[str, float] = {}
         it = 0
         for it in range(1, opt.max_iter + 1):
-            u = self.factor.solve(
-                step.F - s.N.T @ (om * (q + lam)) - s.Tau.T @ (om * step.fric * q)
-            )
+            u = self.factor.solve(step.F - s.layer_forces(lam, q, step.fric))
             y = s.N @ u
             if it % opt.check_every == 0:
                 res = kkt_residuals(s, step, u, lam)
