@@ -40,13 +40,10 @@ def _meshes() -> dict[str, vm.Mesh]:
     out = {
         "squares": rectangle_squares(SIZE, (4, 2)),
         "triangles": rectangle_triangles(SIZE, (4, 2), diagonal="alternate"),
+        "voronoi": vm.rectangle_voronoi(SIZE, 30, seed=1),
+        "hanging": vm.squares_with_hanging_nodes(SIZE, (4, 2)),
+        "nonconvex": vm.nonconvex_mesh(SIZE, (4, 2)),
     }
-    if hasattr(vm, "rectangle_voronoi"):
-        out["voronoi"] = vm.rectangle_voronoi(SIZE, 30, seed=1)
-    if hasattr(vm, "squares_with_hanging_nodes"):
-        out["hanging"] = vm.squares_with_hanging_nodes(SIZE, (4, 2))
-    if hasattr(vm, "nonconvex_mesh"):
-        out["nonconvex"] = vm.nonconvex_mesh(SIZE, (4, 2))
     return {k: tag_rectangle(m) for k, m in out.items()}
 
 

@@ -147,6 +147,26 @@ def test_locate_cells_finds_the_containing_polygon() -> None:
         assert MplPath(mesh.points[mesh.cell(c)]).contains_point(p)
 
 
+def test_locate_cells_on_cell_boundaries_and_outside() -> None:
+    """Vertices and edge midpoints (claimed by no crossing test on some cell) go to a cell
+    whose boundary holds them; points outside the domain get -1."""
+    from vemwear.post.errors import locate_cells
+
+    assert ex54.locate_cells is locate_cells
+    mesh = PATCH_MESHES["nonconvex"]
+    e = mesh.edges
+    on = np.vstack([mesh.points, 0.5 * (mesh.points[e[:, 0]] + mesh.points[e[:, 1]])])
+    pts = np.vstack([on, [[-0.5, 0.5], [2.5, 0.5], [1.0, 1.5]]])
+    cells = locate_cells(mesh, pts)
+    np.testing.assert_array_equal(cells[len(on) :], -1)
+    assert np.all(cells[: len(on)] >= 0)
+    for p, c in zip(on, cells[: len(on)], strict=True):
+        X = mesh.points[mesh.cell(c)]
+        A, B = X, np.roll(X, -1, axis=0)
+        s = np.clip(np.sum((p - A) * (B - A), axis=1) / np.sum((B - A) ** 2, axis=1), 0, 1)
+        assert np.min(np.linalg.norm(p - (A + s[:, None] * (B - A)), axis=1)) < 1e-12
+
+
 def test_shared_vertices_are_the_corners_for_unrelated_meshes() -> None:
     a = ex54.square_mesh((8, 4))
     b = ex54.polygon_mesh(32, seed=0)

@@ -305,3 +305,11 @@ def test_cell_strain_stress_linear_field() -> None:
         + 3 * S[0, 1] ** 2
     )
     np.testing.assert_allclose(vm, vm_ref)
+
+
+def test_jsonable_converts_numpy_paths_and_non_finite() -> None:
+    from vemwear.post.results import jsonable
+
+    data = {1: (np.float64(0.5), np.int64(3)), "a": np.array([1.0, np.nan]), "p": Path("x/y")}
+    assert jsonable(data) == {"1": [0.5, 3], "a": [1.0, None], "p": "x/y"}
+    json.dumps(jsonable({"inf": float("inf"), "f": np.sqrt}))  # no error

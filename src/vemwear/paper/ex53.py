@@ -63,7 +63,7 @@ DESCRIPTION = (
 
 DIVISIONS: tuple[int, int] = ex52.DIVISIONS  # h = 1/16
 BASE_STEPS: int = 64  # the finest uniform partition, k = 1/BASE_STEPS
-MU, KAPPA = 0.2, 2.0
+MU, KAPPA = ex52.DATA_SETS["set1"]["mu"], ex52.DATA_SETS["set1"]["kappa"]
 T = ex52.T
 
 #: Legend labels of the four partitions (by subdirectory name), for BASE_STEPS = 64.

@@ -46,8 +46,8 @@ from scipy.spatial import cKDTree
 
 from ..cli.output import write_outputs
 from ..mesh import Mesh, quality_report, rectangle_voronoi, tag_rectangle
-from ..post.errors import contact_l2_norm
-from ..post.results import _jsonable
+from ..post.errors import contact_l2_norm, locate_cells
+from ..post.results import jsonable
 from ..simulate import Problem, Result, SolverOptions, simulate
 from ..vem import projection_coefficients
 from . import ExampleRun, ex52
@@ -94,8 +94,7 @@ DESCRIPTION = (
     "(paper Figs. 7-9), with a Voronoi refinement study"
 )
 
-MU = 0.2
-KAPPA = 2.0
+MU, KAPPA = ex52.DATA_SETS["set1"]["mu"], ex52.DATA_SETS["set1"]["kappa"]
 DIVISIONS: tuple[int, int] = (64, 32)  # mesh A: 2048 squares, h = 1/32
 N_CELLS = 2048  # mesh B: 2048 Voronoi polygons
 SEED = 0
@@ -211,83 +210,6 @@ def profile_difference(
 
 
 # ---------------------------------------------------------------------------- Pi u at points
-def _padded_cells(mesh: Mesh) -> NDArray[np.float64]:
-    """(n_cells, n_max, 2) vertex coordinates, shorter cells padded with their last vertex."""
-    nmax = int(mesh.cell_sizes.max())
-    X = np.zeros((mesh.n_cells, nmax, 2))
-    for n, (ids, verts) in mesh.groups.items():
-        pad = np.concatenate([verts, np.repeat(verts[:, -1:], nmax - n, axis=1)], axis=1)
-        X[ids] = mesh.points[pad]
-    return X
-
-
-def _inside(pts: NDArray[np.float64], polys: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """Crossing-number test of point ``i`` in polygon ``polys[i]`` (padded vertex lists)."""
-    A, B = polys, np.roll(polys, -1, axis=1)
-    x, y = pts[:, 0:1], pts[:, 1:2]
-    straddle = (A[..., 1] > y) != (B[..., 1] > y)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xc = A[..., 0] + (y - A[..., 1]) * (B[..., 0] - A[..., 0]) / (B[..., 1] - A[..., 1])
-    return (np.sum(straddle & (x < xc), axis=1) % 2) == 1
-
-
-def _distance_to_boundary(pts: FloatArray, polys: FloatArray) -> FloatArray:
-    """Distance from point ``i`` to the boundary of polygon ``polys[i]``."""
-    A, B = polys, np.roll(polys, -1, axis=1)
-    d = B - A
-    r = pts[:, None, :] - A
-    L2 = np.sum(d * d, axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.clip(np.where(L2 > 0, np.sum(r * d, axis=-1) / L2, 0.0), 0.0, 1.0)
-    return np.min(np.linalg.norm(r - s[..., None] * d, axis=-1), axis=1)
-
-
-def locate_cells(mesh: Mesh, points: ArrayLike, k: int = 12) -> NDArray[np.int64]:
-    """The cell containing each point (-1 for points outside the mesh).
-
-    Candidates are the ``k`` cells with the nearest vertex averages (a KD-tree); the
-    first candidate that contains the point by the crossing-number test wins. A point
-    on cell boundaries (or the domain boundary) that no test claims goes to the
-    candidate whose boundary is nearest, within ``1e-9`` of the mesh extent.
-
-    Parameters
-    ----------
-    mesh : Mesh
-    points : (n, 2) array_like
-    k : int
-        Number of candidate cells per point.
-
-    Returns
-    -------
-    (n,) int array
-    """
-    pts = np.asarray(points, dtype=float).reshape(-1, 2)
-    centre = np.zeros((mesh.n_cells, 2))
-    np.add.at(centre, mesh.edge_cells, mesh.points[mesh.cell_vertices])
-    centre /= mesh.cell_sizes[:, None]
-    k = min(int(k), mesh.n_cells)
-    _d, cand = cKDTree(centre).query(pts, k=k)
-    cand = np.asarray(cand).reshape(len(pts), k)
-    X = _padded_cells(mesh)
-    cell = -np.ones(len(pts), dtype=np.int64)
-    for j in range(k):
-        todo = np.flatnonzero(cell < 0)
-        if todo.size == 0:
-            break
-        hit = _inside(pts[todo], X[cand[todo, j]])
-        cell[todo[hit]] = cand[todo[hit], j]
-    todo = np.flatnonzero(cell < 0)
-    if todo.size:
-        dist = np.stack(
-            [_distance_to_boundary(pts[todo], X[cand[todo, j]]) for j in range(k)], axis=1
-        )
-        best = np.argmin(dist, axis=1)
-        tol = 1e-9 * float(np.ptp(mesh.points, axis=0).max())
-        ok = dist[np.arange(len(todo)), best] <= tol
-        cell[todo[ok]] = cand[todo[ok], best[ok]]
-    return cell
-
-
 def evaluate_projection(
     mesh: Mesh, u: ArrayLike, points: ArrayLike, cells: ArrayLike | None = None
 ) -> NDArray[np.float64]:
@@ -934,7 +856,7 @@ def run(
     timings["total"] = time.perf_counter() - t_start
     details["timings"] = timings
     (out / "example_5_4.json").write_text(
-        json.dumps(_jsonable(details), indent=2) + "\n", encoding="utf-8"
+        json.dumps(jsonable(details), indent=2) + "\n", encoding="utf-8"
     )
     report = out / "example_5_4.md"
     report.write_text(report_markdown(details), encoding="utf-8")

@@ -77,7 +77,8 @@ DESCRIPTION = (
     "(paper Tables 1 and 2)"
 )
 
-MU, KAPPA = 0.2, 2.0  # not stated for 5.5 in the paper: Example 5.3's data (data set 1)
+# not stated for 5.5 in the paper: Example 5.3's data (Example 5.2's data set 1)
+MU, KAPPA = ex52.DATA_SETS["set1"]["mu"], ex52.DATA_SETS["set1"]["kappa"]
 LEVELS: tuple[int, ...] = (4, 8, 16, 32, 64)  # 1/h = 1/k
 REFERENCE: int = 256
 T = ex52.T
@@ -346,56 +347,54 @@ def _pow2(n: int) -> str:
     return f"2^-{k}" if 2**k == n else f"1/{n}"
 
 
+#: Our rows of Tables 1 and 2 in :func:`tables_markdown`: (label, column, part).
+TABLE1_ROWS: tuple[tuple[str, str, str], ...] = (
+    ("ours, t = T: error", "u_H1_T", "errors"),
+    ("ours, t = T: order", "u_H1_T", "orders"),
+    ("ours, max over t: error", "u_H1_max", "errors"),
+    ("ours, max over t: order", "u_H1_max", "orders"),
+    ("ours, H1 seminorm, t = T", "u_H1semi_T", "errors"),
+    ("ours, H1 seminorm, order", "u_H1semi_T", "orders"),
+    ("ours, H1 seminorm, max over t", "u_H1semi_max", "errors"),
+    ("ours on the fine mesh, H1 seminorm, t = T", "u_fine_H1semi_T", "errors"),
+    ("ours on the fine mesh, H1 seminorm, order", "u_fine_H1semi_T", "orders"),
+    ("ours on the fine mesh, H1 seminorm, max over t", "u_fine_H1semi_max", "errors"),
+    ("ours on the fine mesh, H1, t = T", "u_fine_H1_T", "errors"),
+)
+TABLE2_ROWS: tuple[tuple[str, str, str], ...] = (
+    ("ours, t = T: error", "w_L2_T", "errors"),
+    ("ours, t = T: order", "w_L2_T", "orders"),
+    ("ours, max over t: error", "w_L2_max", "errors"),
+    ("ours, max over t: order", "w_L2_max", "orders"),
+    ("ours, nodal quadrature, t = T", "w_nodal_T", "errors"),
+    ("ours, nodal quadrature, order", "w_nodal_T", "orders"),
+    ("ours on the fine mesh, t = T", "w_fine_L2_T", "errors"),
+    ("ours on the fine mesh, order", "w_fine_L2_T", "orders"),
+)
+
+
 def tables_markdown(tables: dict[str, Any], reference: int) -> str:
     """Tables 1 and 2 (ours beside the paper's) and the variants, as Markdown."""
     ns = tables["n"]
-    head = "| h = k | " + " | ".join(_pow2(n) for n in ns) + " |"
-    sep = "|---|" + "---|" * len(ns)
+    fmt = {"errors": _e, "orders": _o}
 
-    def row(label: str, vals: Sequence[float | None], fmt: Callable[[Any], str]) -> str:
-        return f"| {label} | " + " | ".join(fmt(v) for v in vals) + " |"
+    def row(label: str, vals: Sequence[float | None], part: str) -> str:
+        return f"| {label} | " + " | ".join(fmt[part](v) for v in vals) + " |"
 
-    def paper(tab: dict[str, Any], part: str) -> list[float | None]:
-        return [tab[part].get(n) for n in ns]
+    def table(title: str, paper: dict[str, Any], rows: Sequence[tuple[str, str, str]]) -> list[str]:
+        return [
+            f"### {title} (reference h = k = 1/{reference})",
+            "",
+            "| h = k | " + " | ".join(_pow2(n) for n in ns) + " |",
+            "|---|" + "---|" * len(ns),
+            *(row(f"paper: {p[:-1]}", [paper[p].get(n) for n in ns], p) for p in fmt),
+            *(row(label, tables[key][part], part) for label, key, part in rows),
+            "",
+        ]
 
     lines = [
-        f"### Table 1: relative H1 error of the displacement (reference h = k = 1/{reference})",
-        "",
-        head,
-        sep,
-        row("paper: error", paper(PAPER_TABLE1, "errors"), _e),
-        row("paper: order", paper(PAPER_TABLE1, "orders"), _o),
-        row("ours, t = T: error", tables["u_H1_T"]["errors"], _e),
-        row("ours, t = T: order", tables["u_H1_T"]["orders"], _o),
-        row("ours, max over t: error", tables["u_H1_max"]["errors"], _e),
-        row("ours, max over t: order", tables["u_H1_max"]["orders"], _o),
-        row("ours, H1 seminorm, t = T", tables["u_H1semi_T"]["errors"], _e),
-        row("ours, H1 seminorm, order", tables["u_H1semi_T"]["orders"], _o),
-        row("ours, H1 seminorm, max over t", tables["u_H1semi_max"]["errors"], _e),
-        row("ours on the fine mesh, H1 seminorm, t = T", tables["u_fine_H1semi_T"]["errors"], _e),
-        row("ours on the fine mesh, H1 seminorm, order", tables["u_fine_H1semi_T"]["orders"], _o),
-        row(
-            "ours on the fine mesh, H1 seminorm, max over t",
-            tables["u_fine_H1semi_max"]["errors"],
-            _e,
-        ),
-        row("ours on the fine mesh, H1, t = T", tables["u_fine_H1_T"]["errors"], _e),
-        "",
-        f"### Table 2: relative L2(Gamma_C) error of the wear (reference h = k = 1/{reference})",
-        "",
-        head,
-        sep,
-        row("paper: error", paper(PAPER_TABLE2, "errors"), _e),
-        row("paper: order", paper(PAPER_TABLE2, "orders"), _o),
-        row("ours, t = T: error", tables["w_L2_T"]["errors"], _e),
-        row("ours, t = T: order", tables["w_L2_T"]["orders"], _o),
-        row("ours, max over t: error", tables["w_L2_max"]["errors"], _e),
-        row("ours, max over t: order", tables["w_L2_max"]["orders"], _o),
-        row("ours, nodal quadrature, t = T", tables["w_nodal_T"]["errors"], _e),
-        row("ours, nodal quadrature, order", tables["w_nodal_T"]["orders"], _o),
-        row("ours on the fine mesh, t = T", tables["w_fine_L2_T"]["errors"], _e),
-        row("ours on the fine mesh, order", tables["w_fine_L2_T"]["orders"], _o),
-        "",
+        *table("Table 1: relative H1 error of the displacement", PAPER_TABLE1, TABLE1_ROWS),
+        *table("Table 2: relative L2(Gamma_C) error of the wear", PAPER_TABLE2, TABLE2_ROWS),
     ]
     return "\n".join(lines)
 

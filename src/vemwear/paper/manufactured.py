@@ -136,23 +136,15 @@ def traction(
 def _builders() -> dict[str, Callable[[int], Mesh]]:
     import vemwear.mesh as vm
 
-    out: dict[str, Callable[[int], Mesh]] = {
+    return {
         "squares": lambda n: rectangle_squares(SIZE, (n, n)),
         "triangles": lambda n: rectangle_triangles(SIZE, (n, n)),
+        "voronoi": lambda n: vm.rectangle_voronoi(SIZE, n * n, seed=0),
+        "hanging": lambda n: vm.squares_with_hanging_nodes(SIZE, (n, n), "checkerboard"),
+        "distorted": lambda n: vm.distorted_quads(SIZE, (n, n), 0.2, seed=0),
+        "hexagons": lambda n: vm.hexagons(SIZE, n),
+        "nonconvex": lambda n: vm.nonconvex_mesh(SIZE, (n, n)),
     }
-    if hasattr(vm, "rectangle_voronoi"):
-        out["voronoi"] = lambda n: vm.rectangle_voronoi(SIZE, n * n, seed=0)
-    elif hasattr(vm, "voronoi_mesh") and hasattr(vm, "rectangle_domain"):
-        out["voronoi"] = lambda n: vm.voronoi_mesh(vm.rectangle_domain(SIZE), n * n, 0)
-    if hasattr(vm, "squares_with_hanging_nodes"):
-        out["hanging"] = lambda n: vm.squares_with_hanging_nodes(SIZE, (n, n), "checkerboard")
-    if hasattr(vm, "distorted_quads"):
-        out["distorted"] = lambda n: vm.distorted_quads(SIZE, (n, n), 0.2, seed=0)
-    if hasattr(vm, "hexagons"):
-        out["hexagons"] = lambda n: vm.hexagons(SIZE, n)
-    if hasattr(vm, "nonconvex_mesh"):
-        out["nonconvex"] = lambda n: vm.nonconvex_mesh(SIZE, (n, n))
-    return out
 
 
 def available_families() -> list[str]:

@@ -50,7 +50,7 @@ on the fan triangulation of every cell.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -81,6 +81,7 @@ __all__ = [
     "exact_errors",
     "fan_quadrature",
     "linear_field_norms",
+    "locate_cells",
     "match_vertices",
     "polygon_moments",
     "projected_norm",
@@ -281,6 +282,29 @@ def common_levels(
 
 
 # ----------------------------------------------------------------------------- geometry
+class _Fan(NamedTuple):
+    """The fan of triangles ``(xbar, x_i, x_{i+1})`` of a batch of ``m`` cells with ``n``
+    vertices each."""
+
+    X: NDArray[np.float64]  # (m, n, 2) vertices x_i
+    X_next: NDArray[np.float64]  # (m, n, 2) vertices x_{i+1}
+    xbar: NDArray[np.float64]  # (m, 2) vertex averages
+    rel: NDArray[np.float64]  # (m, n, 2) x_i - xbar
+    rel_next: NDArray[np.float64]  # (m, n, 2) x_{i+1} - xbar
+    area: NDArray[np.float64]  # (m, n) signed areas of the triangles
+
+
+def _fans(mesh: Mesh) -> Iterator[tuple[NDArray[np.int64], _Fan]]:
+    """``(cell ids, fan)`` for every group of cells of equal vertex count."""
+    for _n, (ids, verts) in mesh.groups.items():
+        X = mesh.points[verts]
+        xb = X.mean(axis=1)
+        a = X - xb[:, None, :]
+        b = np.roll(a, -1, axis=1)
+        A = 0.5 * (a[..., 0] * b[..., 1] - b[..., 0] * a[..., 1])
+        yield ids, _Fan(X, np.roll(X, -1, axis=1), xb, a, b, A)
+
+
 def polygon_moments(
     mesh: Mesh,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
@@ -297,15 +321,11 @@ def polygon_moments(
     nc = mesh.n_cells
     area, xbar = np.zeros(nc), np.zeros((nc, 2))
     M1, M2 = np.zeros((nc, 2)), np.zeros((nc, 2, 2))
-    for _n, (ids, verts) in mesh.groups.items():
-        X = mesh.points[verts]
-        xb = X.mean(axis=1)
-        a = X - xb[:, None, :]
-        b = np.roll(a, -1, axis=1)
-        A = 0.5 * (a[..., 0] * b[..., 1] - b[..., 0] * a[..., 1])  # (m, n) signed
+    for ids, f in _fans(mesh):
+        a, b, A = f.rel, f.rel_next, f.area
         s = a + b
         area[ids] = A.sum(axis=1)
-        xbar[ids] = xb
+        xbar[ids] = f.xbar
         M1[ids] = np.einsum("mi,mic->mc", A, s) / 3.0
         outer = (
             np.einsum("mic,mid->micd", a, a)
@@ -368,20 +388,40 @@ class ProjectedNorms:
         ``|Pi u|^2_{H1(K)} = |K| |G|_F^2``.
         """
         vbar, G = self.coefficients(u)
-        GM1 = np.einsum("kij,kj->ki", G, self.M1)
-        l2 = (
-            self.area * np.sum(vbar**2, axis=1)
-            + 2.0 * np.sum(vbar * GM1, axis=1)
-            + np.einsum("kij,kjl,kil->k", G, self.M2, G)
-        )
-        return np.maximum(l2, 0.0), self.area * np.sum(G**2, axis=(1, 2))
+        return _linear_norms_sq(self.area, self.M1, self.M2, vbar, G)
 
     def norm(self, u: ArrayLike, norm: str = "H1") -> float:
         """``||Pi u||`` in the norm ``"H1"`` or ``"H1semi"`` (module docstring)."""
-        if norm not in DISPLACEMENT_NORMS:
-            raise ValueError(f"norm must be one of {DISPLACEMENT_NORMS}, got {norm!r}")
-        l2, semi = self.norms_sq(u)
-        return math.sqrt(float(semi.sum() + (l2.sum() if norm == "H1" else 0.0)))
+        _check_norm(norm)
+        return _total(*self.norms_sq(u), norm)
+
+
+def _check_norm(norm: str) -> None:
+    if norm not in DISPLACEMENT_NORMS:
+        raise ValueError(f"norm must be one of {DISPLACEMENT_NORMS}, got {norm!r}")
+
+
+def _total(l2: NDArray[np.float64], semi: NDArray[np.float64], norm: str) -> float:
+    """The norm ``"H1"`` or ``"H1semi"`` over the mesh from the squared cell norms."""
+    return math.sqrt(float(semi.sum() + (l2.sum() if norm == "H1" else 0.0)))
+
+
+def _linear_norms_sq(
+    area: NDArray[np.float64],
+    M1: NDArray[np.float64],
+    M2: NDArray[np.float64],
+    vbar: NDArray[np.float64],
+    G: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Squared L2 norm and H1 seminorm per cell of ``vbar + G (x - xbar)``, from the
+    moments about ``xbar`` (:func:`polygon_moments`)."""
+    GM1 = np.einsum("kij,kj->ki", G, M1)
+    l2 = (
+        area * np.sum(vbar**2, axis=1)
+        + 2.0 * np.sum(vbar * GM1, axis=1)
+        + np.einsum("kij,kjl,kil->k", G, M2, G)
+    )
+    return np.maximum(l2, 0.0), area * np.sum(G**2, axis=(1, 2))
 
 
 def linear_field_norms(mesh: Mesh, u: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -402,27 +442,16 @@ def linear_field_norms(mesh: Mesh, u: ArrayLike) -> tuple[NDArray[np.float64], N
     -------
     l2_sq, semi_sq : (n_cells,) arrays
     """
-    xbar_p, vbar, G = projection_coefficients(mesh, np.asarray(u, dtype=float))
-    area, xbar, M1, M2 = polygon_moments(mesh)
-    if not np.allclose(xbar, xbar_p, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(xbar).max()))):
-        raise RuntimeError("projection_coefficients: xbar is not the vertex average")
-    GM1 = np.einsum("kij,kj->ki", G, M1)
-    l2 = (
-        area * np.sum(vbar**2, axis=1)
-        + 2.0 * np.sum(vbar * GM1, axis=1)
-        + np.einsum("kij,kjl,kil->k", G, M2, G)
-    )
-    semi = area * np.sum(G**2, axis=(1, 2))
-    return np.maximum(l2, 0.0), semi
+    # projection_coefficients and polygon_moments both expand about the vertex average
+    _xbar, vbar, G = projection_coefficients(mesh, np.asarray(u, dtype=float))
+    area, _xbar, M1, M2 = polygon_moments(mesh)
+    return _linear_norms_sq(area, M1, M2, vbar, G)
 
 
 def projected_norm(mesh: Mesh, u: ArrayLike, norm: str = "H1") -> float:
     """``||Pi u||`` over the mesh in the norm ``"H1"`` or ``"H1semi"`` (module docstring)."""
-    if norm not in DISPLACEMENT_NORMS:
-        raise ValueError(f"norm must be one of {DISPLACEMENT_NORMS}, got {norm!r}")
-    l2, semi = linear_field_norms(mesh, u)
-    total = semi.sum() + (l2.sum() if norm == "H1" else 0.0)
-    return math.sqrt(float(total))
+    _check_norm(norm)
+    return _total(*linear_field_norms(mesh, u), norm)
 
 
 def displacement_error(
@@ -443,9 +472,16 @@ def displacement_error(
     -------
     RelativeError
     """
+    _check_norm(norm)
     uh = np.asarray(u_h, dtype=float).reshape(mesh.n_points, 2)
     ur = np.asarray(u_ref, dtype=float).reshape(mesh.n_points, 2)
-    return _ratio(projected_norm(mesh, uh - ur, norm), projected_norm(mesh, ur, norm))
+    area, _xbar, M1, M2 = polygon_moments(mesh)  # once for both fields
+
+    def total(v: NDArray[np.float64]) -> float:
+        _xb, vbar, G = projection_coefficients(mesh, v)
+        return _total(*_linear_norms_sq(area, M1, M2, vbar, G), norm)
+
+    return _ratio(total(uh - ur), total(ur))
 
 
 def contact_l2_norm(
@@ -564,6 +600,88 @@ def _point_segment(
     return np.linalg.norm(P - foot, axis=-1), s
 
 
+def _vertex_averages(mesh: Mesh) -> NDArray[np.float64]:
+    """(n_cells, 2) vertex average of every cell."""
+    xbar = np.zeros((mesh.n_cells, 2))
+    np.add.at(xbar, mesh.edge_cells, mesh.points[mesh.cell_vertices])
+    return xbar / mesh.cell_sizes[:, None]
+
+
+def _padded_edges(mesh: Mesh) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """(n_cells, n_max) vertex ids ``V`` and ``Vn``: edge ``i`` of a cell runs from
+    ``V[:, i]`` to ``Vn[:, i]`` (closing edge last); the lanes past a cell's vertex count
+    are degenerate edges ``v_0 -> v_0``, which no point test sees."""
+    sizes = mesh.cell_sizes
+    lane = np.arange(int(sizes.max()))[None, :]
+    pad = np.minimum(lane, sizes[:, None] - 1)
+    V = mesh.cell_vertices[mesh.cell_offsets[:-1, None] + pad]
+    nxt = np.where(lane < sizes[:, None] - 1, pad + 1, 0)  # edge i: v_i -> v_{i+1 mod n}
+    Vn = mesh.cell_vertices[mesh.cell_offsets[:-1, None] + nxt]
+    return np.where(lane < sizes[:, None], V, Vn), Vn
+
+
+def _inside(
+    P: NDArray[np.float64], A: NDArray[np.float64], B: NDArray[np.float64]
+) -> NDArray[np.bool_]:
+    """Crossing-number test of the points P (t, 1, 2) in the polygons of edges A -> B
+    (t, n, 2)."""
+    y = P[..., 1]
+    cross = (A[..., 1] > y) != (B[..., 1] > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xint = A[..., 0] + (y - A[..., 1]) * (B[..., 0] - A[..., 0]) / (B[..., 1] - A[..., 1])
+    return np.sum(cross & (P[..., 0] < xint), axis=1) % 2 == 1
+
+
+def locate_cells(mesh: Mesh, points: ArrayLike, k: int = 12) -> NDArray[np.int64]:
+    """The cell containing each point (-1 for points outside the mesh).
+
+    Candidates are the ``k`` cells with the nearest vertex averages (a KD-tree); the
+    first candidate that contains the point by the crossing-number test wins. A point
+    on cell boundaries (or the domain boundary) that no test claims goes to the
+    candidate whose boundary is nearest, within ``1e-9`` of the mesh extent.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    points : (n, 2) array_like
+    k : int
+        Number of candidate cells per point.
+
+    Returns
+    -------
+    (n,) int array
+    """
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    k = min(int(k), mesh.n_cells)
+    _d, cand = cKDTree(_vertex_averages(mesh)).query(pts, k=k)
+    cand = np.asarray(cand).reshape(len(pts), k)
+    V, Vn = _padded_edges(mesh)
+    C = mesh.points
+    cell = -np.ones(len(pts), dtype=np.int64)
+    for j in range(k):
+        todo = np.flatnonzero(cell < 0)
+        if todo.size == 0:
+            break
+        c = cand[todo, j]
+        hit = _inside(pts[todo][:, None, :], C[V[c]], C[Vn[c]])
+        cell[todo[hit]] = c[hit]
+    todo = np.flatnonzero(cell < 0)
+    if todo.size:
+        P = pts[todo][:, None, :]
+        dist = np.stack(
+            [
+                _point_segment(P, C[V[cand[todo, j]]], C[Vn[cand[todo, j]]])[0].min(axis=1)
+                for j in range(k)
+            ],
+            axis=1,
+        )
+        best = np.argmin(dist, axis=1)
+        tol = 1e-9 * float(np.ptp(mesh.points, axis=0).max())
+        ok = dist[np.arange(len(todo)), best] <= tol
+        cell[todo[ok]] = cand[todo[ok], best[ok]]
+    return cell
+
+
 def prolongation(
     coarse: Mesh,
     fine_points: ArrayLike,
@@ -622,21 +740,11 @@ def prolongation(
     hit = np.flatnonzero(dist <= tol)
     add(hit, near[hit], np.ones(len(hit)))
     # 2. points on a coarse edge or inside a coarse cell
-    nc = coarse.n_cells
-    sizes = coarse.cell_sizes
-    nmax = int(sizes.max())
-    lane = np.arange(nmax)[None, :]
-    pad = np.minimum(lane, sizes[:, None] - 1)
-    V = coarse.cell_vertices[coarse.cell_offsets[:-1, None] + pad]  # (nc, nmax), padded
-    nxt = np.where(lane < sizes[:, None] - 1, pad + 1, 0)  # edge i: v_i -> v_{i+1 mod n}
-    Vn = coarse.cell_vertices[coarse.cell_offsets[:-1, None] + nxt]
-    V = np.where(lane < sizes[:, None], V, Vn)  # padded lanes: degenerate edges v_0 -> v_0
-    xbar = np.zeros((nc, 2))
-    np.add.at(xbar, coarse.edge_cells, C[coarse.cell_vertices])
-    xbar /= sizes[:, None]
-    k = min(int(candidates), nc)
+    V, Vn = _padded_edges(coarse)  # (nc, nmax), padded with degenerate edges
+    nmax = V.shape[1]
+    k = min(int(candidates), coarse.n_cells)
     todo = np.flatnonzero(dist > tol)
-    _d, cand = cKDTree(xbar).query(X[todo], k=k)
+    _d, cand = cKDTree(_vertex_averages(coarse)).query(X[todo], k=k)
     cand = np.asarray(cand).reshape(len(todo), k)
     for r in range(k):
         if todo.size == 0:
@@ -653,11 +761,7 @@ def prolongation(
             sj = s[t_, j[t_]]
             add(todo[t_], V[cells[t_], j[t_]], 1.0 - sj)
             add(todo[t_], Vn[cells[t_], j[t_]], sj)
-        y = P[..., 1]
-        cross = (A[..., 1] > y) != (B[..., 1] > y)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            xint = A[..., 0] + (y - A[..., 1]) * (B[..., 0] - A[..., 0]) / (B[..., 1] - A[..., 1])
-        inside = (np.sum(cross & (P[..., 0] < xint), axis=1) % 2 == 1) & ~on_edge
+        inside = _inside(P, A, B) & ~on_edge
         if np.any(inside):
             # mean value coordinates: w_i = (tan(a_{i-1}/2) + tan(a_i/2)) / r_i, with a_i the
             # angle at x of the edge (A_i, B_i); tan(a/2) = cross / (r_A r_B + dot)
@@ -964,21 +1068,14 @@ def fan_quadrature(
     points : (Q, 2) ; weights : (Q,) ; cell : (Q,) int (the cell of each point)
     """
     P, W, C = [], [], []
-    for _n, (ids, verts) in mesh.groups.items():
-        X = mesh.points[verts]
-        xb = X.mean(axis=1)
-        a, b = X, np.roll(X, -1, axis=1)
-        c = np.broadcast_to(xb[:, None, :], a.shape)
-        A = 0.5 * (
-            (a[..., 0] - c[..., 0]) * (b[..., 1] - c[..., 1])
-            - (b[..., 0] - c[..., 0]) * (a[..., 1] - c[..., 1])
-        )  # (m, n)
+    for ids, f in _fans(mesh):
+        c = f.xbar[None, :, None, :]
         pts = (
-            _D5_BARY[:, 0, None, None, None] * c[None]
-            + _D5_BARY[:, 1, None, None, None] * a[None]
-            + _D5_BARY[:, 2, None, None, None] * b[None]
+            _D5_BARY[:, 0, None, None, None] * c
+            + _D5_BARY[:, 1, None, None, None] * f.X[None]
+            + _D5_BARY[:, 2, None, None, None] * f.X_next[None]
         )  # (7, m, n, 2)
-        w = _D5_W[:, None, None] * A[None]  # (7, m, n)
+        w = _D5_W[:, None, None] * f.area[None]  # (7, m, n)
         P.append(pts.reshape(-1, 2))
         W.append(w.ravel())
         C.append(np.broadcast_to(ids[None, :, None], w.shape).ravel())

@@ -108,6 +108,7 @@ if TYPE_CHECKING:
 __all__ = [
     "NPZ_NAME",
     "SUMMARY_NAME",
+    "jsonable",
     "load_result",
     "load_summary",
     "mesh_from_arrays",
@@ -157,16 +158,16 @@ def result_arrays(result: Result) -> dict[str, NDArray[Any]]:
     }
 
 
-def _jsonable(x: Any) -> Any:
+def jsonable(x: Any) -> Any:
     """Convert NumPy scalars/arrays, paths and tuples to JSON data; non-finite -> None."""
     if isinstance(x, Mapping):
-        return {str(k): _jsonable(v) for k, v in x.items()}
+        return {str(k): jsonable(v) for k, v in x.items()}
     if isinstance(x, (list, tuple, set, frozenset)):
-        return [_jsonable(v) for v in x]
+        return [jsonable(v) for v in x]
     if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
+        return jsonable(x.tolist())
     if isinstance(x, np.generic):
-        return _jsonable(x.item())
+        return jsonable(x.item())
     if isinstance(x, bool) or x is None or isinstance(x, (int, str)):
         return x
     if isinstance(x, float):
@@ -176,6 +177,9 @@ def _jsonable(x: Any) -> Any:
     if callable(x):
         return getattr(x, "__name__", type(x).__name__)
     return str(x)
+
+
+_jsonable = jsonable  # the former private name, still imported by vemwear.cli.config
 
 
 def _max(a: NDArray[Any]) -> float:
@@ -304,7 +308,7 @@ def save_result(
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
     arrays = result_arrays(result)
-    summary = _jsonable(_summary(result, extra, partial))
+    summary = jsonable(_summary(result, extra, partial))
     targets = [out / NPZ_NAME, out / SUMMARY_NAME]
     temps: list[Path] = []
     try:
