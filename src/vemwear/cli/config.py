@@ -295,39 +295,25 @@ def _takes_no_mesh(fn: Callable[..., Any]) -> bool:
 def mesh_families() -> dict[str, Callable[..., Mesh]]:
     """Mesh generators available as ``[mesh] generator = NAME``.
 
-    ``squares`` and ``triangles`` always exist. Further families are the public
-    generator functions of :mod:`vemwear.mesh` (those returning a ``Mesh`` without
-    taking one): ``rectangle_NAME`` and ``NAME_mesh`` are available as ``NAME`` (the
-    ``rectangle_`` one wins if both exist), every generator also under its full
-    function name, and a ``GENERATORS`` or ``FAMILIES`` mapping of the package, if it
-    defines one, adds or overrides names.
+    The short names of :data:`vemwear.mesh.GENERATORS` (those of ``vemwear mesh
+    generate``), and every public generator function of :mod:`vemwear.mesh` (one
+    returning a ``Mesh`` without taking one) under its function name.
     """
     from .. import mesh as mesh_pkg
 
-    short: dict[str, Callable[..., Mesh]] = {}
-    full: dict[str, Callable[..., Mesh]] = {}
+    fams: dict[str, Callable[..., Mesh]] = {}
     for n in list(getattr(mesh_pkg, "__all__", dir(mesh_pkg))):
         obj = getattr(mesh_pkg, n, None)
         if (
-            n.startswith("_")
-            or n in _NOT_FAMILIES
-            or not inspect.isfunction(obj)
-            or not _returns_mesh(obj)
-            or not _takes_no_mesh(obj)
+            not n.startswith("_")
+            and n not in _NOT_FAMILIES
+            and inspect.isfunction(obj)
+            and _returns_mesh(obj)
+            and _takes_no_mesh(obj)
         ):
-            continue
-        full[n] = obj
-        if n.endswith("_mesh") and n[: -len("_mesh")] not in short:
-            short[n[: -len("_mesh")]] = obj
-    for n, obj in full.items():
-        if n.startswith("rectangle_"):
-            short[n[len("rectangle_") :]] = obj
-    fam = {**full, **short}
-    for reg in ("GENERATORS", "FAMILIES"):
-        table = getattr(mesh_pkg, reg, None)
-        if isinstance(table, Mapping):
-            fam.update({str(k): v for k, v in table.items() if callable(v)})
-    return fam
+            fams[n] = obj
+    fams.update(mesh_pkg.GENERATORS)
+    return fams
 
 
 def _family_names(fams: Mapping[str, Callable[..., Mesh]]) -> list[str]:
@@ -361,10 +347,7 @@ def _generator_args(
     if rect_domain and ("size" in sec or "origin" in sec):
         if "domain" in sec:
             raise ck.fail(where, "must give either 'domain' or 'size'/'origin', not both")
-        size = ck.vector(sec.get("size", [1.0, 1.0]), f"{where} size")
-        for i, x in enumerate(size):
-            if not x > 0:
-                raise ck.fail(f"{where} size[{i}]", f"must be > 0, got {x:g}")
+        size = _size(ck, sec.get("size", [1.0, 1.0]), f"{where} size")
         x0, y0 = ck.vector(sec.get("origin", [0.0, 0.0]), f"{where} origin")
         kwargs["domain"] = (
             (x0, y0),
@@ -392,19 +375,25 @@ def _generator_args(
                 kwargs[k] = tuple(
                     ck.integer(x, f"{where} divisions[{i}]", ge=1) for i, x in enumerate(v)
                 )
+            elif k == "size":
+                kwargs[k] = _size(ck, v, f"{where} size")
             else:
-                vec = ck.vector(v, f"{where} {k}")
-                if k == "size":
-                    for i, x in enumerate(vec):
-                        if not x > 0:
-                            raise ck.fail(f"{where} size[{i}]", f"must be > 0, got {x:g}")
-                kwargs[k] = vec
+                kwargs[k] = ck.vector(v, f"{where} {k}")
             continue
         kwargs[k] = _to_python(ck, v, f"{where} {k}")
     missing = [r for r in required if r not in kwargs]
     if missing:
         raise ck.fail(where, f"missing required key {missing[0]!r} for generator {gen!r}")
     return kwargs
+
+
+def _size(ck: _Checker, v: Any, where: str) -> tuple[float, float]:
+    """Side lengths ``[lx, ly]`` of a rectangle, both > 0."""
+    size = ck.vector(v, where)
+    for i, x in enumerate(size):
+        if not x > 0:
+            raise ck.fail(f"{where}[{i}]", f"must be > 0, got {x:g}")
+    return size
 
 
 def _to_python(ck: _Checker, v: Any, where: str) -> Any:
@@ -572,7 +561,7 @@ def _boundary(ck: _Checker, data: dict[str, Any], mesh: Mesh, from_file: bool) -
     """
     if "boundary" not in data:
         if from_file:
-            return mesh  # keep the file's tags
+            return _file_tags(ck, mesh, data["mesh"]["file"])
         raise ck.fail(
             "",
             "missing required section [boundary] (which sides are clamped, traction and contact)",
@@ -583,7 +572,7 @@ def _boundary(ck: _Checker, data: dict[str, Any], mesh: Mesh, from_file: bool) -
             raise ck.fail("boundary", f"must be a table or the string 'file', got {b!r}")
         if not from_file:
             raise ck.fail("boundary", "= 'file' needs [mesh] file (generated meshes have no tags)")
-        return mesh
+        return _file_tags(ck, mesh, data["mesh"]["file"])
     b = ck.table(b, "[boundary]")
     allowed = _SECTIONS["boundary"][0]
     ck.keys(b, allowed, "[boundary]", required=("clamped", "contact"))
@@ -612,9 +601,11 @@ def _boundary(ck: _Checker, data: dict[str, Any], mesh: Mesh, from_file: bool) -
                 ck.keys(it, ("from", "to"), w, required=("from", "to"))
                 a = ck.vector(it["from"], f"{w}.from")
                 c = ck.vector(it["to"], f"{w}.to")
-                if a == c:
-                    raise ck.fail(w, f"has coinciding end points {list(a)}")
-                hit |= np.asarray(segment_predicate(a, c)(mid), dtype=bool)
+                try:
+                    on_segment = segment_predicate(a, c)
+                except ValueError:  # the end points coincide
+                    raise ck.fail(w, f"has coinciding end points {list(a)}") from None
+                hit |= np.asarray(on_segment(mid), dtype=bool)
             else:
                 raise ck.fail(
                     w,
@@ -653,6 +644,20 @@ def _boundary(ck: _Checker, data: dict[str, Any], mesh: Mesh, from_file: bool) -
                 "= 'rest' selects no boundary edge (every edge is already in another part)",
             )
     return tagged
+
+
+def _file_tags(ck: _Checker, mesh: Mesh, name: str) -> Mesh:
+    """The mesh with the boundary parts of its file, which must tag clamped and contact."""
+    for part in ("clamped", "contact"):
+        if not np.any(mesh.boundary_tags == part_code(part)):
+            raise ck.fail(
+                f"[mesh] file {name!r}:",
+                f"the file tags no {part!r} boundary edges (line cells "
+                f"with cell data 'part' = {part_code(part)}, or a Gmsh "
+                f"physical group {part!r}); tag them or add a [boundary] "
+                "section",
+            )
+    return mesh
 
 
 def _pt(p: NDArray[np.float64]) -> str:
@@ -806,7 +811,7 @@ def _load(ck: _Checker, v: Any, where: str) -> tuple[float, float] | FieldExpres
 
 
 def _show_list(v: list[Any]) -> str:
-    return "[" + ", ".join(repr(c) if isinstance(c, str) else f"{c!r}" for c in v) + "]"
+    return "[" + ", ".join(repr(c) for c in v) + "]"
 
 
 def _velocity(ck: _Checker, v: Any) -> tuple[float, float] | dict[str, Any] | VelocityExpression:
@@ -1153,24 +1158,12 @@ def parse_config(
     solver = SolverOptions(method=method, tol=tol, max_iter=max_iter, backend=backend)
 
     # -- mesh and boundary (after the cheap checks), then the problem itself
-    if "mesh" not in data:  # pragma: no cover - caught above
-        raise ck.fail("", "missing required section [mesh]")
     mesh, mesh_info = build_mesh(
         data["mesh"], base_dir, source, file_tags=not isinstance(data.get("boundary"), dict)
     )
     from_file = "file" in mesh_info
     try:
         mesh = _boundary(ck, data, mesh, from_file=from_file)
-        if from_file and not isinstance(data.get("boundary"), dict):
-            for name in ("clamped", "contact"):
-                if not np.any(mesh.boundary_tags == part_code(name)):
-                    raise ck.fail(
-                        f"[mesh] file {data['mesh']['file']!r}:",
-                        f"the file tags no {name!r} boundary edges (line cells "
-                        f"with cell data 'part' = {part_code(name)}, or a Gmsh "
-                        f"physical group {name!r}); tag them or add a [boundary] "
-                        "section",
-                    )
         _check_contact_data(
             ck, mesh, {"g": (g, "> 0"), "mu": (mu, ">= 0"), "kappa": (kappa, ">= 0")}
         )

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
+from ..solvers import SOLVERS
 from .config import ConfigError, load_config, smallness_report
 from .output import OutputDirError, atomic_output_dir, check_output_dir
 
@@ -58,7 +59,7 @@ continues from there and gives the same result as an uninterrupted run.
 
 The configuration file format is documented in docs/config.md.
 """
-SOLVER_METHODS = ("newton", "newton-full", "uzawa")
+SOLVER_METHODS = tuple(SOLVERS)
 
 
 class _Interrupted(KeyboardInterrupt):
@@ -68,6 +69,26 @@ class _Interrupted(KeyboardInterrupt):
 # ---------------------------------------------------------------------------- parser
 def _formatter(prog: str) -> argparse.HelpFormatter:
     return argparse.RawDescriptionHelpFormatter(prog, max_help_position=30)
+
+
+def _subcommand(
+    sub: argparse._SubParsersAction,  # type: ignore[type-arg]
+    name: str,
+    summary: str,
+    description: str | None = None,
+) -> argparse.ArgumentParser:
+    """A subcommand parser with the common help layout (``summary`` is its ``--help`` line)."""
+    return sub.add_parser(
+        name,
+        help=summary,
+        description=summary if description is None else description,
+        epilog=EPILOG,
+        formatter_class=_formatter,
+    )
+
+
+def _debug_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--debug", action="store_true", help="print the full traceback on errors")
 
 
 def _common(p: argparse.ArgumentParser, *, solve: bool) -> None:
@@ -95,7 +116,7 @@ def _common(p: argparse.ArgumentParser, *, solve: bool) -> None:
             action="store_true",
             help="do not show the progress bar of the time loop",
         )
-    p.add_argument("--debug", action="store_true", help="print the full traceback on errors")
+    _debug_option(p)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -114,7 +135,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
 
     d = "Validate a configuration file, solve the problem and write the results."
-    p = sub.add_parser("run", help=d, description=d, epilog=EPILOG, formatter_class=_formatter)
+    p = _subcommand(sub, "run", d)
     p.add_argument("config", metavar="CONFIG.toml", help="configuration file (docs/config.md)")
     _common(p, solve=True)
     p.add_argument(
@@ -126,7 +147,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_run)
 
     d = "Validate a configuration file and summarize the problem, without solving."
-    p = sub.add_parser("check", help=d, description=d, epilog=EPILOG, formatter_class=_formatter)
+    p = _subcommand(sub, "check", d)
     p.add_argument("config", metavar="CONFIG.toml", help="configuration file (docs/config.md)")
     _common(p, solve=False)
     p.set_defaults(func=cmd_check)
@@ -136,13 +157,7 @@ def build_parser() -> argparse.ArgumentParser:
     listing = "available examples:\n" + "\n".join(
         f"  {name:<5}{text}" for name, text in examples.items()
     )
-    p = sub.add_parser(
-        "example",
-        help=d,
-        description=d + "\n\n" + listing,
-        epilog=EPILOG,
-        formatter_class=_formatter,
-    )
+    p = _subcommand(sub, "example", d, d + "\n\n" + listing)
     p.add_argument(
         "name",
         metavar="NAME",
@@ -175,7 +190,7 @@ def build_parser() -> argparse.ArgumentParser:
         "Run the paper's examples (5.2, 5.3, 5.4, 5.5) into subdirectories and write "
         "OUTDIR/report.md, our numbers beside the paper's."
     )
-    p = sub.add_parser("paper", help=d, description=d, epilog=EPILOG, formatter_class=_formatter)
+    p = _subcommand(sub, "paper", d)
     p.add_argument(
         "--quick",
         action="store_true",
@@ -194,9 +209,7 @@ def build_parser() -> argparse.ArgumentParser:
         "Convergence of the VEM for linear elasticity alone against a manufactured smooth "
         "solution on several mesh families; prints the table of errors and orders."
     )
-    p = sub.add_parser(
-        "manufactured", help=d, description=d, epilog=EPILOG, formatter_class=_formatter
-    )
+    p = _subcommand(sub, "manufactured", d)
     p.add_argument(
         "--families",
         type=_families_list,
@@ -365,7 +378,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         out,
         solver,
         force=args.force,
-        resume=getattr(args, "resume", False),
+        resume=args.resume,
         solver_flag=args.solver,
     )
     _, warning = smallness_report(cfg.problem)
@@ -643,4 +656,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    # ``python -m vemwear.cli.main``: run the imported module, not this copy named
+    # __main__, so that its classes (e.g. _Interrupted, checked by resume._reason) are
+    # the ones the other modules import
+    from vemwear.cli.main import main as _main
+
+    sys.exit(_main())

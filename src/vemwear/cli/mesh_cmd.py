@@ -36,7 +36,6 @@ import json
 import math
 import os
 import sys
-import tempfile
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,25 +45,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..mesh import (
+    GENERATORS,
     PARTS,
     Mesh,
     MeshError,
-    distorted_quads,
-    hexagons,
-    nonconvex_mesh,
     part_code,
     quality_report,
     read_mesh,
-    rectangle_squares,
-    rectangle_triangles,
-    rectangle_voronoi,
     refine_along,
-    squares_with_hanging_nodes,
     tag_rectangle,
     write_mesh,
 )
 from ..mesh.checks import check_boundary, check_cells, check_conforming, check_vertices
-from .output import OutputDirError
+from .output import OutputDirError, atomic_file
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -112,9 +105,9 @@ class Family:
     Attributes
     ----------
     name : str
-        The command-line name.
+        The command-line name, a key of :data:`vemwear.mesh.GENERATORS`.
     function : callable
-        The generator of :mod:`vemwear.mesh`; called with ``size`` and, as given,
+        The generator, ``GENERATORS[name]``; called with ``size`` and, as given,
         ``divisions``, ``n_cells``, ``seed`` and further keyword arguments.
     description : str
         One line for ``--help``.
@@ -128,28 +121,29 @@ class Family:
     """
 
     name: str
-    function: Callable[..., Mesh]
     description: str
     cells_per_division: int = 1
     takes_divisions: bool = True
     takes_cells: bool = False
     takes_seed: bool = False
 
+    @property
+    def function(self) -> Callable[..., Mesh]:
+        return GENERATORS[self.name]
+
 
 #: The families of ``vemwear mesh generate``, by command-line name.
 FAMILIES: dict[str, Family] = {
     f.name: f
     for f in (
-        Family("squares", rectangle_squares, "axis-aligned rectangles, nx * ny cells"),
+        Family("squares", "axis-aligned rectangles, nx * ny cells"),
         Family(
             "triangles",
-            rectangle_triangles,
             "each grid rectangle cut into two triangles, 2 * nx * ny cells",
             cells_per_division=2,
         ),
         Family(
             "voronoi",
-            rectangle_voronoi,
             "centroidal Voronoi polygons, exactly --cells cells (the paper's mesh B)",
             cells_per_division=0,
             takes_divisions=False,
@@ -158,20 +152,17 @@ FAMILIES: dict[str, Family] = {
         ),
         Family(
             "distorted",
-            distorted_quads,
             "grid quadrilaterals with randomly moved interior vertices",
             takes_seed=True,
         ),
         Family(
             "hexagons",
-            hexagons,
             "hexagon-dominant (Voronoi cells of a triangular lattice)",
             cells_per_division=0,
         ),
-        Family("nonconvex", nonconvex_mesh, "chevron-shaped non-convex cells, nx * ny cells"),
+        Family("nonconvex", "chevron-shaped non-convex cells, nx * ny cells"),
         Family(
             "hanging",
-            squares_with_hanging_nodes,
             "squares, every other one split in four (hanging nodes in the others)",
             cells_per_division=0,
             takes_seed=True,
@@ -322,9 +313,7 @@ def generate_mesh(
         kwargs[key] = value
     try:
         mesh = fam.function(**kwargs)
-    except TypeError as exc:
-        raise MeshError(f"family {family!r}: {exc}") from exc
-    except ValueError as exc:
+    except (TypeError, ValueError) as exc:
         raise MeshError(f"family {family!r}: {exc}") from exc
     if boundary == "paper":
         mesh = tag_rectangle(mesh)
@@ -359,14 +348,9 @@ def load_mesh(path: str | os.PathLike[str]) -> Mesh:
         from .config import load_config
 
         return load_config(p).problem.mesh
-    with _quiet() as chatter:
+    with _quiet():  # read_mesh turns meshio's errors (and its sys.exit) into a MeshError
         try:
             return read_mesh(p)
-        except SystemExit as exc:  # meshio exits on some files it cannot parse
-            why = " ".join(chatter.getvalue().split())
-            raise MeshError(
-                f"{p}: cannot read mesh (meshio could not parse it" + (f": {why})" if why else ")")
-            ) from exc
         except (OSError, ValueError) as exc:  # MeshError is a ValueError
             msg = str(exc)
             raise MeshError(msg if msg.startswith(str(p)) else f"{p}: {msg}") from exc
@@ -393,33 +377,6 @@ def _check_target(path: Path, force: bool, suffixes: Sequence[str] | None) -> Pa
     if parent.exists() and not parent.is_dir():
         raise OutputDirError(f"cannot create {path}: {parent} is not a directory")
     return path
-
-
-@contextlib.contextmanager
-def _atomic_file(path: Path) -> Iterator[Path]:
-    """A temporary file next to ``path`` (same suffix) that replaces it on success."""
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, name = tempfile.mkstemp(
-            dir=path.parent, prefix=f".{path.stem}.tmp-", suffix=path.suffix
-        )
-    except OSError as exc:
-        raise OutputDirError(f"cannot create {path}: {exc.strerror or exc}") from exc
-    os.close(fd)
-    tmp = Path(name)
-    try:
-        yield tmp
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def save_mesh(mesh: Mesh, path: str | os.PathLike[str], *, force: bool = False) -> Path:
@@ -454,7 +411,7 @@ def save_mesh(mesh: Mesh, path: str | os.PathLike[str], *, force: bool = False) 
                 f"{p}: gmsh files hold triangles and quadrilaterals only, but the "
                 f"mesh has {counts}; write .vtu instead"
             )
-    with _atomic_file(p) as tmp, _quiet():
+    with atomic_file(p) as tmp, _quiet():
         write_mesh(mesh, tmp)
     return p
 
@@ -784,7 +741,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
         title=f"{Path(args.file).name}: "
         f"{mesh.n_cells} cells, {mesh.n_points} vertices, h = {mesh.h:.3g}",
     )
-    with _atomic_file(out) as tmp:
+    with atomic_file(out) as tmp:
         fig.savefig(tmp, dpi=150, format=out.suffix[1:].lower())
     print(f"{PROG}: mesh plot: wrote {out}")
     return EXIT_OK
@@ -822,15 +779,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # t
     argparse.ArgumentParser
         The ``mesh`` parser.
     """
-    from .main import EPILOG, _formatter
-
-    def debug(p: argparse.ArgumentParser) -> None:
-        p.add_argument("--debug", action="store_true", help="print the full traceback on errors")
+    from .main import _debug_option, _subcommand
 
     d = "Generate, inspect, plot and convert polygonal meshes."
-    mesh_p = sub.add_parser(
-        "mesh", help=d, description=d, epilog=EPILOG, formatter_class=_formatter
-    )
+    mesh_p = _subcommand(sub, "mesh", d)
     msub = mesh_p.add_subparsers(dest="mesh_command", metavar="SUBCOMMAND", title="subcommands")
     msub.required = True
 
@@ -838,13 +790,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # t
         "Generate a mesh of a rectangle, tag the paper's boundary parts (clamped left, "
         "traction top and right, contact bottom) and write it as .vtu or .msh."
     )
-    p = msub.add_parser(
-        "generate",
-        help=d,
-        description=d + "\n\n" + _family_listing(),
-        epilog=EPILOG,
-        formatter_class=_formatter,
-    )
+    p = _subcommand(msub, "generate", d, d + "\n\n" + _family_listing())
     p.add_argument(
         "family",
         metavar="FAMILY",
@@ -911,7 +857,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # t
         "right, contact bottom) or none (untagged)",
     )
     p.add_argument("--force", action="store_true", help="replace an existing FILE")
-    debug(p)
+    _debug_option(p)
     p.set_defaults(func=cmd_generate)
 
     d = (
@@ -919,21 +865,21 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # t
         "and hanging nodes), the validity and the quality (assumption A1) of a mesh. "
         "Exit code 2 if the mesh is invalid."
     )
-    p = msub.add_parser("inspect", help=d, description=d, epilog=EPILOG, formatter_class=_formatter)
+    p = _subcommand(msub, "inspect", d)
     p.add_argument(
         "file",
         metavar="FILE_OR_CONFIG",
         help="mesh file (.vtu, .msh, ...) or configuration file (.toml)",
     )
     p.add_argument("--json", action="store_true", help="print the numbers as JSON")
-    debug(p)
+    _debug_option(p)
     p.set_defaults(func=cmd_inspect)
 
     d = (
         "Draw a mesh with its boundary parts coloured and hanging nodes marked; with "
         "--quality, every cell coloured by rho_K / h_K (assumption A1)."
     )
-    p = msub.add_parser("plot", help=d, description=d, epilog=EPILOG, formatter_class=_formatter)
+    p = _subcommand(msub, "plot", d)
     p.add_argument(
         "file",
         metavar="FILE_OR_CONFIG",
@@ -944,14 +890,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # t
     )
     p.add_argument("--quality", action="store_true", help="colour cells by rho_K / h_K")
     p.add_argument("--force", action="store_true", help="replace an existing image")
-    debug(p)
+    _debug_option(p)
     p.set_defaults(func=cmd_plot)
 
     d = "Read a mesh (or build the mesh of a configuration file) and write it as .vtu or .msh."
-    p = msub.add_parser("convert", help=d, description=d, epilog=EPILOG, formatter_class=_formatter)
+    p = _subcommand(msub, "convert", d)
     p.add_argument("input", metavar="IN", help="mesh file or configuration file (.toml)")
     p.add_argument("output", metavar="OUT", help="output file: .vtu or .msh")
     p.add_argument("--force", action="store_true", help="replace an existing OUT")
-    debug(p)
+    _debug_option(p)
     p.set_defaults(func=cmd_convert)
     return mesh_p

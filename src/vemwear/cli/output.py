@@ -24,6 +24,7 @@ if TYPE_CHECKING:
 __all__ = [
     "FIGURE_NAMES",
     "OutputDirError",
+    "atomic_file",
     "atomic_output_dir",
     "check_output_dir",
     "write_outputs",
@@ -135,6 +136,31 @@ def atomic_output_dir(outdir: str | os.PathLike[str], force: bool = False) -> It
         _commit(tmp, out, force)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+@contextmanager
+def atomic_file(path: Path) -> Iterator[Path]:
+    """A temporary file next to ``path`` (same suffix) that replaces it on success.
+
+    The file counterpart of :func:`atomic_output_dir` (used by ``vemwear mesh``); the
+    caller checks beforehand whether ``path`` may be replaced.
+    """
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, name = tempfile.mkstemp(
+            dir=path.parent, prefix=f".{path.stem}.tmp-", suffix=path.suffix
+        )
+    except OSError as exc:
+        raise OutputDirError(f"cannot create {path}: {exc.strerror or exc}") from exc
+    os.close(fd)
+    tmp = Path(name)
+    try:
+        yield tmp
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
         raise
 
 

@@ -32,12 +32,10 @@ import math
 import shlex
 import shutil
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
-
-import numpy as np
 
 from .. import __version__
 from .config import Config
@@ -241,14 +239,8 @@ def save_partial(
     """
     from .. import post
 
-    extra = {
-        "config": cfg.data,
-        "config_path": str(Path(config_path).resolve()),
-        "title": cfg.title,
-        "resume": {**resume_info, "command": command},
-    }
+    extra = {**_inputs_extra(cfg, config_path), "resume": {**resume_info, "command": command}}
     c, L = int(result.completed), len(result.t)
-    result = _zero_unfinished(result)
     with atomic_output_dir(part, force=True) as tmp:
         post.save_result(result, tmp, extra=extra, partial=reason)
         shutil.copyfile(config_path, tmp / CONFIG_COPY)
@@ -281,22 +273,13 @@ them, later levels are zero. summary.json says "partial": true and gives the rea
     return part
 
 
-def _zero_unfinished(result: Result) -> Result:
-    """A copy whose levels ``>= completed`` are zero (unfinished levels may hold values)."""
-    c = int(result.completed)
-    arrays = {
-        k: np.array(getattr(result, k), copy=True)
-        for k in ("wear", "u_nu", "lam", "p", "iterations", "residuals")
+def _inputs_extra(cfg: Config, config_path: str | Path) -> dict[str, Any]:
+    """What ``summary.json`` stores under ``inputs.extra`` about the configuration."""
+    return {
+        "config": cfg.data,
+        "config_path": str(Path(config_path).resolve()),
+        "title": cfg.title,
     }
-    for a in arrays.values():
-        a[c:] = 0
-    keep = np.asarray(result.u_levels) < c
-    return replace(
-        result,
-        u=np.asarray(result.u)[keep].copy(),
-        u_levels=np.asarray(result.u_levels)[keep].copy(),
-        **arrays,
-    )
 
 
 def load_partial(part: Path, cfg: Config, current: Mapping[str, Any]) -> Result:
@@ -453,9 +436,7 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result:
 
     cfg = plan.cfg
     extra = {
-        "config": cfg.data,
-        "config_path": str(plan.config_path.resolve()),
-        "title": cfg.title,
+        **_inputs_extra(cfg, plan.config_path),
         "inputs_sha256": plan.resume_info.get("inputs_sha256"),
     }
     if plan.previous is not None:

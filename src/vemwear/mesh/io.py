@@ -126,7 +126,9 @@ def read_mesh(path: str | Path) -> Mesh:
         # some meshio readers print to stdout, and some call sys.exit on bad files
         with contextlib.redirect_stdout(io.StringIO()):
             m = meshio.read(path)
-    except (Exception, SystemExit) as exc:  # meshio raises many kinds; report them as one
+    except SystemExit:  # some meshio readers exit on files they cannot parse
+        raise MeshError(f"{path}: cannot read mesh (meshio could not parse it)") from None
+    except Exception as exc:  # meshio raises many kinds; report them as one
         raise MeshError(f"{path}: cannot read mesh ({exc or type(exc).__name__})") from None
     return from_meshio(m, source=str(path))
 

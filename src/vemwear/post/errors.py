@@ -61,6 +61,7 @@ from scipy.spatial import cKDTree
 
 from ..mesh.polymesh import Mesh
 from ..vem.assembly import projection_coefficients
+from ..vem.local import Fan, fan
 
 if TYPE_CHECKING:
     from ..simulate import Result
@@ -282,27 +283,10 @@ def common_levels(
 
 
 # ----------------------------------------------------------------------------- geometry
-class _Fan(NamedTuple):
-    """The fan of triangles ``(xbar, x_i, x_{i+1})`` of a batch of ``m`` cells with ``n``
-    vertices each."""
-
-    X: NDArray[np.float64]  # (m, n, 2) vertices x_i
-    X_next: NDArray[np.float64]  # (m, n, 2) vertices x_{i+1}
-    xbar: NDArray[np.float64]  # (m, 2) vertex averages
-    rel: NDArray[np.float64]  # (m, n, 2) x_i - xbar
-    rel_next: NDArray[np.float64]  # (m, n, 2) x_{i+1} - xbar
-    area: NDArray[np.float64]  # (m, n) signed areas of the triangles
-
-
-def _fans(mesh: Mesh) -> Iterator[tuple[NDArray[np.int64], _Fan]]:
+def _fans(mesh: Mesh) -> Iterator[tuple[NDArray[np.int64], Fan]]:
     """``(cell ids, fan)`` for every group of cells of equal vertex count."""
     for _n, (ids, verts) in mesh.groups.items():
-        X = mesh.points[verts]
-        xb = X.mean(axis=1)
-        a = X - xb[:, None, :]
-        b = np.roll(a, -1, axis=1)
-        A = 0.5 * (a[..., 0] * b[..., 1] - b[..., 0] * a[..., 1])
-        yield ids, _Fan(X, np.roll(X, -1, axis=1), xb, a, b, A)
+        yield ids, fan(mesh.points[verts])
 
 
 def polygon_moments(

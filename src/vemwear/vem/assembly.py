@@ -12,7 +12,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polymesh import Mesh
-from .local import Material, element_matrices, geometry
+from .local import Material, element_matrices, fan, geometry
 
 #: A vector field given as a constant 2-vector or a callable ``f(x, t)`` on (m, 2) points.
 Field = ArrayLike | Callable[[NDArray[np.float64], float], ArrayLike]
@@ -71,20 +71,13 @@ def cell_means(mesh: Mesh, f: Field, t: float = 0.0, name: str = "f") -> NDArray
         out[:] = _eval_field(f, np.zeros((1, 2)), t, name)[0]
         return out
     for _n, (ids, verts) in mesh.groups.items():
-        X = mesh.points[verts]
-        area, xbar, _q = geometry(X)
-        A, Bv = X, np.roll(X, -1, axis=1)
-        C = np.broadcast_to(xbar[:, None, :], A.shape)
-        tri_area = 0.5 * (
-            (A[..., 0] - C[..., 0]) * (Bv[..., 1] - C[..., 1])
-            - (Bv[..., 0] - C[..., 0]) * (A[..., 1] - C[..., 1])
-        )
+        fn = fan(mesh.points[verts])
         acc = np.zeros((len(ids), 2))
         for b in _TRI_BARY:
-            pts = b[0] * C + b[1] * A + b[2] * Bv  # (m, n, 2)
+            pts = b[0] * fn.xbar[:, None, :] + b[1] * fn.X + b[2] * fn.X_next  # (m, n, 2)
             val = _eval_field(f, pts.reshape(-1, 2), t, name).reshape(pts.shape)
-            acc += np.sum(val * tri_area[..., None], axis=1) / 3.0
-        out[ids] = acc / area[:, None]
+            acc += np.sum(val * fn.area[..., None], axis=1) / 3.0
+        out[ids] = acc / fn.area.sum(axis=1)[:, None]
     return out
 
 

@@ -13,6 +13,7 @@ For a batch of ``m`` cells with ``n`` vertices each (coordinates ``X``, shape
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -69,6 +70,28 @@ def geometry(X: NDArray[np.float64]):
     N = np.stack([d[..., 1], -d[..., 0]], axis=-1)  # |e| n for counter-clockwise cells
     q = 0.5 * (N + np.roll(N, 1, axis=1))
     return area, xbar, q
+
+
+class Fan(NamedTuple):
+    """The fan of triangles ``(xbar, x_i, x_{i+1})`` of a batch of ``m`` cells with ``n``
+    vertices each. With signed areas, sums over the fan integrate exactly over any
+    simple cell, star-shaped with respect to ``xbar`` or not."""
+
+    X: NDArray[np.float64]  # (m, n, 2) vertices x_i
+    X_next: NDArray[np.float64]  # (m, n, 2) vertices x_{i+1}
+    xbar: NDArray[np.float64]  # (m, 2) vertex averages
+    rel: NDArray[np.float64]  # (m, n, 2) x_i - xbar
+    rel_next: NDArray[np.float64]  # (m, n, 2) x_{i+1} - xbar
+    area: NDArray[np.float64]  # (m, n) signed areas of the triangles
+
+
+def fan(X: NDArray[np.float64]) -> Fan:
+    """The fan of triangles of a batch of cells with vertex coordinates X (m, n, 2)."""
+    xbar = X.mean(axis=1)
+    a = X - xbar[:, None, :]
+    b = np.roll(a, -1, axis=1)
+    area = 0.5 * (a[..., 0] * b[..., 1] - b[..., 0] * a[..., 1])
+    return Fan(X, np.roll(X, -1, axis=1), xbar, a, b, area)
 
 
 def strain_operator(area: NDArray, q: NDArray) -> NDArray[np.float64]:
