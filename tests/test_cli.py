@@ -10,44 +10,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import small_config
 from vemwear import __version__
 from vemwear.cli import OutputDirError, atomic_output_dir
 from vemwear.cli.main import main
 from vemwear.paper import EXAMPLES, available_examples, ex52, load_example
 from vemwear.simulate import SolverOptions
 
-SMALL = """
-title = "small run"
-[mesh]
-generator = "squares"
-size = [2.0, 1.0]
-divisions = [8, 4]
-[boundary]
-clamped = "left"
-traction = "rest"
-contact = "bottom"
-[material]
-lam = 4.0
-eta = 4.0
-[loads]
-f1 = [0.0, -0.06]
-[contact]
-p = { type = "linear", c = 0.4 }
-g = 0.1
-mu = 0.2
-kappa = 2.0
-v_star = [1.0, 0.0]
-[time]
-T = 1.0
-steps = 8
-[solver]
-method = "newton"
-backend = "scipy"
-[output]
-times = [0.25, 0.5, 0.75, 1.0]
-figures = true
-vtk = true
-"""
+SMALL = small_config(
+    "small run", output={"times": [0.25, 0.5, 0.75, 1.0], "figures": True, "vtk": True}
+)
 
 
 @pytest.fixture

@@ -17,43 +17,14 @@ import numpy as np
 import pytest
 
 import vemwear.simulate as sim
+from conftest import small_config
 from vemwear.cli.main import main
 from vemwear.cli.resume import CONFIG_COPY, README_NAME, partial_path
 from vemwear.solvers import ConvergenceError
 
 STEPS = 40  # > 32: the condensed Newton solver finishes levels in blocks of 32
 
-CONFIG = f"""
-title = "resume test"
-[mesh]
-generator = "squares"
-size = [2.0, 1.0]
-divisions = [8, 4]
-[boundary]
-clamped = "left"
-traction = "rest"
-contact = "bottom"
-[material]
-lam = 4.0
-eta = 4.0
-[loads]
-f1 = [0.0, -0.06]
-[contact]
-p = {{ type = "linear", c = 0.4 }}
-g = 0.1
-mu = 0.2
-kappa = 2.0
-v_star = ["1 + 0.5*sin(2*pi*t)", "0"]
-[time]
-T = 1.0
-steps = {STEPS}
-[solver]
-method = "newton"
-backend = "scipy"
-[output]
-figures = false
-vtk = false
-"""
+CONFIG = small_config("resume test", steps=STEPS, contact={"v_star": ["1 + 0.5*sin(2*pi*t)", "0"]})
 
 REAL_SIMULATE = sim.simulate
 ARRAYS = (
@@ -119,6 +90,15 @@ def no_convergence() -> None:
     raise ConvergenceError("newton did not converge at time level 36 (test)")
 
 
+def stopped_run(config: Path, out: Path, stop_at: Callable[..., None]) -> Path:
+    """Run ``config`` into a ConvergenceError at level 36 (exit code 3), restore the plain
+    :func:`simulate`; return the partial directory (32 finished levels)."""
+    stop_at(36, no_convergence)
+    assert run(config, out) == 3
+    stop_at(None)
+    return partial_path(out)
+
+
 def test_convergence_error_keeps_partial_and_resume_is_bitwise(
     config: Path,
     tmp_path: Path,
@@ -130,9 +110,7 @@ def test_convergence_error_keeps_partial_and_resume_is_bitwise(
     capsys.readouterr()
 
     out = tmp_path / "out"
-    part = partial_path(out)
-    stop_at(36, no_convergence)
-    assert run(config, out) == 3
+    part = stopped_run(config, out, stop_at)
     err = capsys.readouterr().err
     assert err.count("\n") == 1, err  # one line
     assert err.startswith(
@@ -161,7 +139,6 @@ def test_convergence_error_keeps_partial_and_resume_is_bitwise(
     assert leftovers(tmp_path) == []
 
     # without --resume the partial result is protected
-    stop_at(None)
     assert run(config, out) == 2
     assert (
         "holds the finished levels of a stopped run; continue it with --resume"
@@ -176,11 +153,8 @@ def test_resume_completes_bitwise_and_removes_partial(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     out = tmp_path / "out"
-    part = partial_path(out)
-    stop_at(36, no_convergence)
-    assert run(config, out) == 3
+    part = stopped_run(config, out, stop_at)
     assert part.is_dir()
-    stop_at(None)
     assert run(config, out, "--resume") == 0
     text = capsys.readouterr().out
     assert f"resumed from level 32 ({part} removed)" in text
@@ -242,10 +216,7 @@ def test_resume_refused_for_changed_inputs(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     out = tmp_path / "out"
-    part = partial_path(out)
-    stop_at(36, no_convergence)
-    assert run(config, out) == 3
-    stop_at(None)
+    part = stopped_run(config, out, stop_at)
     before = {p.name: p.read_bytes() for p in part.iterdir()}
     capsys.readouterr()
 

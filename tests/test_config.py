@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from conftest import small_config
 from vemwear.cli.config import ConfigError, load_config, parse_config
 from vemwear.contact import LinearCompliance, TableCompliance
 from vemwear.mesh import PARTS, part_code, write_mesh
@@ -19,44 +20,15 @@ from vemwear.paper import ex52
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 
-BASE = """
-title = "small"
-[mesh]
-generator = "squares"
-size = [2.0, 1.0]
-origin = [0.0, 0.0]
-divisions = [8, 4]
-[boundary]
-clamped = "left"
-traction = ["top", "right"]
-contact = "bottom"
-[material]
-lam = 4.0
-eta = 4.0
-[vem]
-stabilization = "paper"
-[loads]
-f1 = [0.0, -0.06]
-f2 = [0.0, 0.0]
-[contact]
-p = { type = "linear", c = 0.4 }
-g = 0.1
-mu = 0.2
-kappa = 2.0
-v_star = [1.0, 0.0]
-[time]
-T = 1.0
-steps = 8
-[solver]
-method = "newton"
-tol = 1e-10
-max_iter = 50
-backend = "scipy"
-[output]
-times = [0.25, 0.5, 1.0]
-figures = false
-vtk = false
-"""
+BASE = small_config(
+    "small",
+    mesh={"origin": [0.0, 0.0]},
+    boundary={"traction": ["top", "right"]},
+    vem={"stabilization": "paper"},
+    loads={"f2": [0.0, 0.0]},
+    solver={"tol": 1e-10, "max_iter": 50},
+    output={"times": [0.25, 0.5, 1.0]},
+)
 
 
 def base() -> dict[str, Any]:
@@ -450,14 +422,7 @@ def test_example_files_match_paper_module(name: str) -> None:
 
 
 # ---------------------------------------------------------------------------- mesh families
-def test_other_mesh_families_are_looked_up(monkeypatch: pytest.MonkeyPatch) -> None:
-    import vemwear.mesh as vm
-
-    families = pytest.importorskip("vemwear.mesh.families")
-    names = ["hexagons", "rectangle_voronoi"]
-    for n in names:
-        monkeypatch.setattr(vm, n, getattr(families, n), raising=False)
-    monkeypatch.setattr(vm, "__all__", sorted({*vm.__all__, *names}))
+def test_other_mesh_families_are_looked_up() -> None:
     d = base()
     d["mesh"] = {"generator": "voronoi", "size": [2.0, 1.0], "n_cells": 24, "seed": 1}
     m = parse(d).problem.mesh
@@ -475,12 +440,7 @@ def test_other_mesh_families_are_looked_up(monkeypatch: pytest.MonkeyPatch) -> N
         parse(d)
 
 
-def test_domain_families_accept_size_and_origin(monkeypatch: pytest.MonkeyPatch) -> None:
-    import vemwear.mesh as vm
-
-    voronoi = pytest.importorskip("vemwear.mesh.voronoi")
-    monkeypatch.setattr(vm, "voronoi_mesh", voronoi.voronoi_mesh, raising=False)
-    monkeypatch.setattr(vm, "__all__", sorted({*vm.__all__, "voronoi_mesh"}))
+def test_domain_families_accept_size_and_origin() -> None:
     d = base()
     d["mesh"] = {
         "generator": "voronoi_mesh",

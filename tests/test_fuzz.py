@@ -27,6 +27,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from conftest import small_config
 from vemwear.cli.config import Config, ConfigError, parse_config
 from vemwear.cli.expr import ExpressionError, parse_expression
 from vemwear.contact import LinearCompliance, TableCompliance
@@ -148,42 +149,16 @@ def test_random_problems_solve_or_fail_cleanly(pr: Problem, method: str) -> None
 
 
 # ---------------------------------------------------------------------------- configurations
-BASE = """
-title = "fuzz"
-[mesh]
-generator = "squares"
-size = [2.0, 1.0]
-divisions = [4, 2]
-[boundary]
-clamped = "left"
-traction = ["top", "right"]
-contact = "bottom"
-[material]
-lam = 4.0
-eta = 4.0
-[vem]
-stabilization = "paper"
-[loads]
-f1 = [0.0, -0.06]
-f2 = [0.0, 0.0]
-[contact]
-p = { type = "linear", c = 0.4 }
-g = 0.1
-mu = 0.2
-kappa = 2.0
-v_star = [1.0, 0.0]
-[time]
-T = 1.0
-steps = 4
-[solver]
-method = "newton"
-tol = 1e-10
-backend = "scipy"
-[output]
-times = [0.5, 1.0]
-figures = false
-vtk = false
-"""
+BASE = small_config(
+    "fuzz",
+    divisions=(4, 2),
+    steps=4,
+    boundary={"traction": ["top", "right"]},
+    vem={"stabilization": "paper"},
+    loads={"f2": [0.0, 0.0]},
+    solver={"tol": 1e-10},
+    output={"times": [0.5, 1.0]},
+)
 VARIANTS = {  # other valid forms, so that mutations reach their checks too
     "contact.g": [{"along": "x", "at": [0.0, 2.0], "values": [0.1, 0.05]}, "0.1 + 0.01*x"],
     "contact.mu": [{"at": [0.0, 1.0], "values": [0.0, 0.3]}, "0.2*(1 + sin(pi*x))"],

@@ -37,32 +37,49 @@ IntArray = NDArray[np.int64]
 
 
 def _corners(X: FloatArray) -> NDArray[np.bool_]:
-    """Geometric corners of a polygon (vertices where the boundary is not straight)."""
-    e_in = X - np.roll(X, 1, axis=0)
-    e_out = np.roll(X, -1, axis=0) - X
-    cr = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
-    dot = np.sum(e_in * e_out, axis=1)
-    scale = np.hypot(e_in[:, 0], e_in[:, 1]) * np.hypot(e_out[:, 0], e_out[:, 1])
+    """Geometric corners of polygons ``X`` (m, n, 2) (vertices where the boundary turns)."""
+    e_in = X - np.roll(X, 1, axis=1)
+    e_out = np.roll(X, -1, axis=1) - X
+    cr = e_in[..., 0] * e_out[..., 1] - e_in[..., 1] * e_out[..., 0]
+    dot = np.sum(e_in * e_out, axis=-1)
+    scale = np.hypot(e_in[..., 0], e_in[..., 1]) * np.hypot(e_out[..., 0], e_out[..., 1])
     straight = (np.abs(cr) <= 1e-10 * scale) & (dot > 0)
     return ~straight
 
 
-def _centre(X: FloatArray) -> FloatArray:
-    """Centroid if strictly inside the kernel, else centre of the largest kernel disk."""
-    B = np.roll(X, -1, axis=0)
-    cr = X[:, 0] * B[:, 1] - B[:, 0] * X[:, 1]
-    area = 0.5 * cr.sum()
-    c = np.array([np.sum((X[:, 0] + B[:, 0]) * cr), np.sum((X[:, 1] + B[:, 1]) * cr)]) / (6 * area)
+def _centres(X: FloatArray, diam: FloatArray) -> FloatArray:
+    """Centroids of polygons ``X`` (m, n, 2) with diameters ``diam`` where strictly inside
+    the kernel, else centres of the largest kernel disks."""
+    B = np.roll(X, -1, axis=1)
+    cr = X[..., 0] * B[..., 1] - B[..., 0] * X[..., 1]
+    area = 0.5 * cr.sum(axis=1)
+    c = np.column_stack(
+        [np.sum((X[..., 0] + B[..., 0]) * cr, axis=1), np.sum((X[..., 1] + B[..., 1]) * cr, axis=1)]
+    ) / (6 * area[:, None])
     e = B - X
-    L = np.hypot(e[:, 0], e[:, 1])
-    side = (e[:, 0] * (c[1] - X[:, 1]) - e[:, 1] * (c[0] - X[:, 0])) / L
-    diam = float(np.max(np.linalg.norm(X[:, None] - X[None], axis=-1)))
-    if np.all(side > 1e-8 * diam):
-        return c
-    rho, cen = _kernel_disk_group(X[None])
-    if not rho[0] > 1e-12 * diam:
-        raise MeshError("cannot refine a cell that is not star-shaped with respect to a disk")
-    return cen[0]
+    L = np.hypot(e[..., 0], e[..., 1])
+    side = (e[..., 0] * (c[:, 1:2] - X[..., 1]) - e[..., 1] * (c[:, 0:1] - X[..., 0])) / L
+    outside = ~np.all(side > 1e-8 * diam[:, None], axis=1)
+    if np.any(outside):
+        rho, cen = _kernel_disk_group(X[outside])
+        if not np.all(rho > 1e-12 * diam[outside]):
+            raise MeshError("cannot refine a cell that is not star-shaped with respect to a disk")
+        c[outside] = cen
+    return c
+
+
+def _per_cell(
+    mesh: Mesh, cells: IntArray, fn: Callable[[FloatArray, IntArray], NDArray]
+) -> dict[int, NDArray]:
+    """``fn(vertex coordinates (m, n, 2), cell ids)`` for the given cells, batched by
+    vertex count; ``{cell: row of the result}``."""
+    out: dict[int, NDArray] = {}
+    for ids, verts in mesh.groups.values():
+        mine = np.isin(ids, cells)
+        if np.any(mine):
+            res = fn(mesh.points[verts[mine]], ids[mine])
+            out.update(zip(ids[mine].tolist(), res, strict=True))
+    return out
 
 
 def refine_cells(
@@ -98,18 +115,20 @@ def refine_cells(
     new_pts: list[FloatArray] = []
     # new vertices on mesh edges: undirected edge -> list of (parameter, vertex id)
     on_edge: dict[tuple[int, int], list[tuple[float, int]]] = {}
-    # cell -> (corner ids, midpoint ids, centre id)
-    plan: dict[int, tuple[list[int], list[int], int]] = {}
+    # refined cell -> ids of the midpoints of its geometric sides, and of its centre
+    mids_of: dict[int, list[int]] = {}
+    centre_of: dict[int, int] = {}
 
     def new_point(xy: FloatArray) -> int:
         new_pts.append(np.asarray(xy, dtype=float))
         return nP + len(new_pts) - 1
 
+    is_corner = _per_cell(mesh, sel, lambda X, _ids: _corners(X))
     for c in sel.tolist():
         V = mesh.cell(c)
         X = P[V]
         n = len(V)
-        cpos = np.flatnonzero(_corners(X))
+        cpos = np.flatnonzero(is_corner[c])
         if len(cpos) < 3:
             raise MeshError(f"cell {c} has fewer than three corners")
         mids: list[int] = []
@@ -137,10 +156,10 @@ def refine_cells(
                 found = new_point(xy)
                 lst.append((t, found))
             mids.append(found)
-        plan[c] = ([int(V[p]) for p in cpos], mids, -1)
+        mids_of[c] = mids
+    centres = _per_cell(mesh, sel, lambda X, ids: _centres(X, mesh.cell_diameters[ids]))
     for c in sel.tolist():
-        corners, mids, _ = plan[c]
-        plan[c] = (corners, mids, new_point(_centre(P[mesh.cell(c)])))
+        centre_of[c] = new_point(centres[c])
 
     points = np.vstack([P, *[p[None] for p in new_pts]]) if new_pts else P.copy()
 
@@ -179,11 +198,10 @@ def refine_cells(
             cells.append(W)
             parent.append(c)
             continue
-        corners, mids, centre = plan[c]
+        mids, centre = mids_of[c], centre_of[c]
         pos = {v: i for i, v in enumerate(W)}
         nW = len(W)
-        k = len(corners)
-        for j in range(k):
+        for j in range(len(mids)):
             start = pos[mids[j - 1]]
             stop = pos[mids[j]]
             length = (stop - start) % nW

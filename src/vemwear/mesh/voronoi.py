@@ -126,6 +126,28 @@ def _polygon_area(p: FloatArray) -> float:
     return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
 
+def _crossing_sides(X: FloatArray, eps: float) -> tuple[NDArray[np.bool_], IntArray, IntArray]:
+    """Which non-adjacent sides ``i < j`` of the polygons ``X`` (m, n, 2) meet.
+
+    Returns the (m, n_pairs) mask and the side pairs ``i``, ``j``; segment
+    parameters within ``[-eps, 1 + eps]`` count as meeting, parallel sides never.
+    """
+    n = X.shape[1]
+    i, j = np.triu_indices(n, k=2)
+    keep = ~((i == 0) & (j == n - 1))  # the last side is adjacent to the first
+    i, j = i[keep], j[keep]
+    B = np.roll(X, -1, axis=1)
+    p, r = X[:, i], B[:, i] - X[:, i]
+    q, s = X[:, j], B[:, j] - X[:, j]
+    rxs = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
+    qp = q - p
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / rxs
+        u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / rxs
+    hit = (rxs != 0) & (t >= -eps) & (t <= 1 + eps) & (u >= -eps) & (u <= 1 + eps)
+    return hit, i, j
+
+
 def as_domain(domain: ArrayLike) -> FloatArray:
     """Validate a domain polygon and return it as a ``(k, 2)`` float array.
 
@@ -152,22 +174,10 @@ def as_domain(domain: ArrayLike) -> FloatArray:
     nxt = np.roll(d, -1, axis=0)
     if np.any(np.linalg.norm(nxt - d, axis=1) <= 1e-12 * scale):
         raise ValueError("domain has repeated consecutive corners")
-    k = len(d)
-    i, j = np.triu_indices(k, k=2)
-    keep = ~((i == 0) & (j == k - 1))
-    i, j = i[keep], j[keep]
-    if len(i):
-        p, r = d[i], nxt[i] - d[i]
-        q, s = d[j], nxt[j] - d[j]
-        rxs = r[:, 0] * s[:, 1] - r[:, 1] * s[:, 0]
-        qp = q - p
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = (qp[:, 0] * s[:, 1] - qp[:, 1] * s[:, 0]) / rxs
-            u = (qp[:, 0] * r[:, 1] - qp[:, 1] * r[:, 0]) / rxs
-        hit = (rxs != 0) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)
-        if np.any(hit):
-            a, b = i[hit][0], j[hit][0]
-            raise ValueError(f"domain sides {a} and {b} cross; use a simple polygon")
+    hit, i, j = _crossing_sides(d[None], eps=0.0)
+    if np.any(hit):
+        a, b = i[hit[0]][0], j[hit[0]][0]
+        raise ValueError(f"domain sides {a} and {b} cross; use a simple polygon")
     if _polygon_area(d) <= 0:
         raise ValueError("domain corners must be listed counter-clockwise (positive area)")
     return d
@@ -195,19 +205,25 @@ def point_in_domain(points: ArrayLike, domain: ArrayLike) -> NDArray[np.bool_]:
     return out
 
 
-def _boundary_distance(points: FloatArray, dom: FloatArray) -> FloatArray:
-    """Distance from every point to the boundary of the polygon."""
+def _nearest_sides(points: FloatArray, dom: FloatArray) -> tuple[IntArray, FloatArray, FloatArray]:
+    """The side of the polygon nearest to every point (the first of equally near ones),
+    the parameter in [0, 1] of the nearest point on it, and the distance."""
     a, b = dom, np.roll(dom, -1, axis=0)
     ab = b - a
     L2 = np.sum(ab * ab, axis=1)
-    out = np.full(len(points), np.inf)
+    side = np.zeros(len(points), dtype=np.int64)
+    par = np.zeros(len(points))
+    dist = np.full(len(points), np.inf)
     chunk = max(1, 2_000_000 // len(dom))
     for s in range(0, len(points), chunk):
         p = points[s : s + chunk, None, :]
         t = np.clip(np.sum((p - a) * ab, axis=2) / L2, 0.0, 1.0)
         d = p - (a + t[..., None] * ab)
-        out[s : s + chunk] = np.sqrt(np.min(np.sum(d * d, axis=2), axis=1))
-    return out
+        dd = np.sqrt(np.sum(d * d, axis=2))
+        k = np.argmin(dd, axis=1)
+        rows = np.arange(len(k))
+        side[s : s + chunk], par[s : s + chunk], dist[s : s + chunk] = k, t[rows, k], dd[rows, k]
+    return side, par, dist
 
 
 # --------------------------------------------------------------------------- Voronoi fans
@@ -436,21 +452,19 @@ def _diagram(seeds: FloatArray, dom: FloatArray, dist: FloatArray | None = None)
     diam = float(np.linalg.norm(hi - lo))
     fans = _fans(seeds, 0.5 * (lo + hi), 4.0 * diam)
     if dist is None:
-        dist = _boundary_distance(seeds, dom)
-    seed_of = np.repeat(np.arange(len(seeds)), np.diff(fans.offsets))
-    r = np.linalg.norm(fans.centres[fans.tri] - seeds[seed_of], axis=1)
+        dist = _nearest_sides(seeds, dom)[2]
+    r = np.linalg.norm(fans.centres[fans.tri] - seeds[fans.seed_of], axis=1)
     R = np.maximum.reduceat(r, fans.offsets[:-1])
     boundary = R >= dist - 1e-12 * diam
     clipped = _clip(fans, np.flatnonzero(boundary), dom)
     return _Diagram(fans, boundary, clipped)
 
 
-def _centroids(dg: _Diagram, seeds: FloatArray) -> tuple[FloatArray, FloatArray]:
-    area, cen = _area_centroid(dg.fans.offsets, dg.fans.centres[dg.fans.tri])
-    b = np.flatnonzero(dg.boundary)
-    ab, cb = _area_centroid(dg.clipped.offsets, dg.clipped.xy)
-    area[b], cen[b] = ab, cb
-    return area, cen
+def _centroids(dg: _Diagram) -> FloatArray:
+    """Centroids of the cells of the diagram (of the clipped polygon for boundary cells)."""
+    cen = _area_centroid(dg.fans.offsets, dg.fans.centres[dg.fans.tri])[1]
+    cen[dg.boundary] = _area_centroid(dg.clipped.offsets, dg.clipped.xy)[1]
+    return cen
 
 
 # --------------------------------------------------------------------------- assembly
@@ -603,37 +617,16 @@ def _invalid_polygons(
         X = points[cv[idx]]
         B = np.roll(X, -1, axis=1)
         area = 0.5 * np.sum(X[..., 0] * B[..., 1] - B[..., 0] * X[..., 1], axis=1)
-        bad = area <= 0
-        if n >= 4:
-            i, j = np.triu_indices(n, k=2)
-            keep = ~((i == 0) & (j == n - 1))
-            i, j = i[keep], j[keep]
-            p, r = X[:, i], B[:, i] - X[:, i]
-            q, s = X[:, j], B[:, j] - X[:, j]
-            rxs = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
-            qp = q - p
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / rxs
-                u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / rxs
-            eps = 1e-9
-            hit = (rxs != 0) & (t >= -eps) & (t <= 1 + eps) & (u >= -eps) & (u <= 1 + eps)
-            bad |= np.any(hit, axis=1)
-        out[sel] = bad
+        out[sel] = (area <= 0) | np.any(_crossing_sides(X, eps=1e-9)[0], axis=1)
     return out
 
 
 def _snap_boundary(points: FloatArray, mesh: Mesh, dom: FloatArray) -> FloatArray:
     """Project vertices of boundary edges exactly onto the nearest domain side."""
     v = np.unique(mesh.boundary_edges)
-    p = points[v]
+    s, tt, _dist = _nearest_sides(points[v], dom)
     a, b = dom, np.roll(dom, -1, axis=0)
-    ab = b - a
-    t = np.clip(np.sum((p[:, None, :] - a) * ab, axis=2) / np.sum(ab * ab, axis=1), 0.0, 1.0)
-    proj = a + t[..., None] * ab
-    dist = np.linalg.norm(p[:, None, :] - proj, axis=2)
-    s = np.argmin(dist, axis=1)
-    best = proj[np.arange(len(v)), s]
-    tt = t[np.arange(len(v)), s]
+    best = a[s] + tt[:, None] * (b - a)[s]
     best = np.where((tt == 0.0)[:, None], a[s], best)
     best = np.where((tt == 1.0)[:, None], b[s], best)
     # points at a corner up to rounding become the corner exactly
@@ -724,7 +717,7 @@ def voronoi_from_seeds(
     s = np.array(seeds, dtype=float)
     if s.ndim != 2 or s.shape[1] != 2 or len(s) < 1:
         raise ValueError(f"seeds must be an (n, 2) array, got shape {s.shape}")
-    dist = _boundary_distance(s, dom)
+    dist = _nearest_sides(s, dom)[2]
     scale = float(np.max(np.ptp(dom, axis=0)))
     out = ~point_in_domain(s, dom) & (dist > 1e-9 * scale)
     if np.any(out):
@@ -820,7 +813,7 @@ def voronoi_mesh(
                 raise MeshError(
                     "Lloyd iterations did not separate Voronoi cells cut in pieces by the domain"
                 )
-        _area, cen = _centroids(dg, seeds)
+        cen = _centroids(dg)
         ok = point_in_domain(cen, dom) & np.all(np.isfinite(cen), axis=1)
         new = np.where(ok[:, None], cen, seeds)
         move = float(np.max(np.linalg.norm(new - seeds, axis=1)))

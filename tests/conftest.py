@@ -1,0 +1,76 @@
+"""Shared test helpers: the small TOML configuration with the paper's data.
+
+Test modules import :func:`small_config` directly (``from conftest import
+small_config``); pytest puts this directory on ``sys.path``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+# The data of Example 5.2 on a coarse mesh of squares. A key set to None is
+# optional: left out unless a test sets it, so that every key keeps its place
+# in the text (tests edit the text with str.replace).
+_PAPER: dict[str, dict[str, Any]] = {
+    "mesh": {"generator": "squares", "size": [2.0, 1.0], "origin": None, "divisions": None},
+    "boundary": {"clamped": "left", "traction": "rest", "contact": "bottom"},
+    "material": {"lam": 4.0, "eta": 4.0},
+    "vem": {"stabilization": None},
+    "loads": {"f1": [0.0, -0.06], "f2": None},
+    "contact": {
+        "p": {"type": "linear", "c": 0.4},
+        "g": 0.1,
+        "mu": 0.2,
+        "kappa": 2.0,
+        "v_star": [1.0, 0.0],
+    },
+    "time": {"T": 1.0, "steps": None},
+    "solver": {"method": "newton", "tol": None, "max_iter": None, "backend": "scipy"},
+    "output": {"times": None, "figures": False, "vtk": False},
+}
+
+
+def _toml(value: Any) -> str:
+    """A TOML value (the few types the configurations use)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, int | float):
+        return repr(value)
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    if isinstance(value, Mapping):
+        return "{ " + ", ".join(f"{k} = {_toml(v)}" for k, v in value.items()) + " }"
+    raise TypeError(f"no TOML form for {value!r}")
+
+
+def small_config(
+    title: str,
+    divisions: Sequence[int] = (8, 4),
+    steps: int = 8,
+    **sections: Mapping[str, Any],
+) -> str:
+    """TOML text of the paper's data on ``divisions`` squares with ``steps`` time steps.
+
+    ``section={key: value, ...}`` sets keys of a section (``None`` leaves a key
+    out); sections without keys are left out. Solver: newton with SciPy; output:
+    no figures, no VTK files.
+    """
+    unknown = set(sections) - set(_PAPER)
+    if unknown:
+        raise ValueError(f"unknown sections {sorted(unknown)}")
+    lines = [f"title = {_toml(title)}"]
+    for name, defaults in _PAPER.items():
+        keys = dict(defaults)
+        if name == "mesh":
+            keys["divisions"] = list(divisions)
+        elif name == "time":
+            keys["steps"] = steps
+        keys.update(sections.get(name, {}))
+        body = [f"{k} = {_toml(v)}" for k, v in keys.items() if v is not None]
+        if body:
+            lines += [f"[{name}]", *body]
+    return "\n".join(lines) + "\n"
