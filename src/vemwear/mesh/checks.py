@@ -43,27 +43,36 @@ def check_cells(mesh: Mesh, rtol: float = 1e-12) -> None:
     check_simple(mesh)
 
 
+def crossing_sides(
+    X: NDArray[np.float64], eps: float
+) -> tuple[NDArray[np.bool_], NDArray[np.int64], NDArray[np.int64]]:
+    """Which non-adjacent sides ``i < j`` of the polygons ``X`` (m, n, 2) meet.
+
+    Returns the (m, n_pairs) mask and the side pairs ``i``, ``j``; segment
+    parameters within ``[-eps, 1 + eps]`` count as meeting, parallel sides never.
+    """
+    n = X.shape[1]
+    i, j = np.triu_indices(n, k=2)
+    keep = ~((i == 0) & (j == n - 1))  # the last side is adjacent to the first
+    i, j = i[keep], j[keep]
+    B = np.roll(X, -1, axis=1)
+    p, r = X[:, i], B[:, i] - X[:, i]
+    q, s = X[:, j], B[:, j] - X[:, j]
+    rxs = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
+    qp = q - p
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / rxs
+        u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / rxs
+    hit = (rxs != 0) & (t >= -eps) & (t <= 1 + eps) & (u >= -eps) & (u <= 1 + eps)
+    return hit, i, j
+
+
 def check_simple(mesh: Mesh) -> None:
     """No cell boundary crosses itself (all pairs of non-adjacent edges are disjoint)."""
     for n, (ids, verts) in mesh.groups.items():
         if n < 4:
             continue
-        X = mesh.points[verts]  # (m, n, 2)
-        A, B = X, np.roll(X, -1, axis=1)
-        i, j = np.triu_indices(n, k=2)
-        keep = ~((i == 0) & (j == n - 1))  # first and last edges are adjacent
-        i, j = i[keep], j[keep]
-        p, r = A[:, i], B[:, i] - A[:, i]
-        q, s = A[:, j], B[:, j] - A[:, j]
-        rxs = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
-        qp = q - p
-        t = qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]
-        u = qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t, u = t / rxs, u / rxs
-        eps = 1e-12
-        cross = (np.abs(rxs) > 0) & (t >= -eps) & (t <= 1 + eps) & (u >= -eps) & (u <= 1 + eps)
-        bad = np.any(cross, axis=1)
+        bad = np.any(crossing_sides(mesh.points[verts], eps=1e-12)[0], axis=1)
         if np.any(bad):
             raise MeshError(f"cells {_ids(ids[bad])} are not simple polygons (their edges cross)")
 

@@ -44,6 +44,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import Delaunay, cKDTree
 from scipy.stats import qmc
 
+from .checks import check_cells, check_conforming, check_vertices, crossing_sides
 from .polymesh import Mesh, MeshError
 
 __all__ = [
@@ -126,28 +127,6 @@ def _polygon_area(p: FloatArray) -> float:
     return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
 
-def _crossing_sides(X: FloatArray, eps: float) -> tuple[NDArray[np.bool_], IntArray, IntArray]:
-    """Which non-adjacent sides ``i < j`` of the polygons ``X`` (m, n, 2) meet.
-
-    Returns the (m, n_pairs) mask and the side pairs ``i``, ``j``; segment
-    parameters within ``[-eps, 1 + eps]`` count as meeting, parallel sides never.
-    """
-    n = X.shape[1]
-    i, j = np.triu_indices(n, k=2)
-    keep = ~((i == 0) & (j == n - 1))  # the last side is adjacent to the first
-    i, j = i[keep], j[keep]
-    B = np.roll(X, -1, axis=1)
-    p, r = X[:, i], B[:, i] - X[:, i]
-    q, s = X[:, j], B[:, j] - X[:, j]
-    rxs = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
-    qp = q - p
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / rxs
-        u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / rxs
-    hit = (rxs != 0) & (t >= -eps) & (t <= 1 + eps) & (u >= -eps) & (u <= 1 + eps)
-    return hit, i, j
-
-
 def as_domain(domain: ArrayLike) -> FloatArray:
     """Validate a domain polygon and return it as a ``(k, 2)`` float array.
 
@@ -174,7 +153,7 @@ def as_domain(domain: ArrayLike) -> FloatArray:
     nxt = np.roll(d, -1, axis=0)
     if np.any(np.linalg.norm(nxt - d, axis=1) <= 1e-12 * scale):
         raise ValueError("domain has repeated consecutive corners")
-    hit, i, j = _crossing_sides(d[None], eps=0.0)
+    hit, i, j = crossing_sides(d[None], eps=0.0)
     if np.any(hit):
         a, b = i[hit[0]][0], j[hit[0]][0]
         raise ValueError(f"domain sides {a} and {b} cross; use a simple polygon")
@@ -617,7 +596,7 @@ def _invalid_polygons(
         X = points[cv[idx]]
         B = np.roll(X, -1, axis=1)
         area = 0.5 * np.sum(X[..., 0] * B[..., 1] - B[..., 0] * X[..., 1], axis=1)
-        out[sel] = (area <= 0) | np.any(_crossing_sides(X, eps=1e-9)[0], axis=1)
+        out[sel] = (area <= 0) | np.any(crossing_sides(X, eps=1e-9)[0], axis=1)
     return out
 
 
@@ -644,8 +623,6 @@ def _build(dg: _Diagram, dom: FloatArray, collapse: float, validate: bool) -> Me
     mesh = Mesh(P, off, cv)
     mesh = Mesh(_snap_boundary(P, mesh, dom), off, cv)
     if validate:
-        from .checks import check_cells, check_conforming, check_vertices
-
         check_vertices(mesh)
         check_cells(mesh)
         check_conforming(mesh)
