@@ -8,7 +8,7 @@ import pytest
 from vemwear.paper import ex52
 from vemwear.simulate import SolverOptions, simulate
 
-FIELDS = ("wear", "u_nu", "lam", "p", "u", "u_levels", "iterations", "residuals")
+FIELDS = ("wear", "u_nu", "p_rigid", "p_soft", "u", "u_levels", "iterations", "residuals")
 
 
 class Stop(Exception):
@@ -34,7 +34,7 @@ def test_resume_equals_uninterrupted_run(method, store, level):
     part = info.value.partial_result
     assert part.is_partial and 0 <= part.completed <= level
     assert np.all(part.u_levels < part.completed)
-    for k in ("wear", "u_nu", "lam", "p", "iterations", "residuals"):
+    for k in ("wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals"):
         assert not np.any(getattr(part, k)[part.completed :]), k  # unfinished levels are zero
     resumed = simulate(pr, opts, store=store, recover_block=4, resume=part)
     ref = simulate(pr, opts, store=store, recover_block=4)

@@ -45,7 +45,7 @@ def test_problem_exercises_both_contact_regimes(small):
     _, r = small
     g = 0.1
     assert np.any(np.isclose(r.u_nu, g, rtol=0, atol=1e-12)), "rigid layer never reached"
-    assert np.any(r.lam > 1e-6) and np.any(r.p > 1e-6)
+    assert np.any(r.p_rigid > 1e-6) and np.any(r.p_soft > 1e-6)
     assert np.any((r.u_nu > 0) & (r.u_nu < g - 1e-6)), "no node in the soft layer only"
     assert r.wear[-1].max() > 0.01
 
@@ -55,8 +55,8 @@ def test_condensed_newton_equals_full_newton(small):
     rf = simulate(pr, "newton-full")
     assert rel(rf.u, r.u) < 1e-10
     assert rel(rf.wear, r.wear) < 1e-10
-    assert rel(rf.lam, r.lam) < 1e-10
-    assert rel(rf.p, r.p) < 1e-10
+    assert rel(rf.p_rigid, r.p_rigid) < 1e-10
+    assert rel(rf.p_soft, r.p_soft) < 1e-10
 
 
 @pytest.mark.parametrize("mu,kappa", [(0.2, 2.0), (0.6, 10.0)])
@@ -66,7 +66,7 @@ def test_uzawa_agrees_with_newton(mu, kappa):
     ru = simulate(pr, SolverOptions("uzawa", tol=1e-12))
     assert rel(ru.u, rn.u) < 1e-8
     assert rel(ru.wear, rn.wear) < 1e-8
-    assert rel(ru.lam, rn.lam) < 1e-8
+    assert rel(ru.p_rigid, rn.p_rigid) < 1e-8
     assert ru.iterations.min() > rn.iterations.max()  # Uzawa is the slow reference
 
 
@@ -77,7 +77,7 @@ def test_example_5_2_newton_and_uzawa_agree():
         pr = paper_problem(divisions=(32, 16), steps=64, mu=mu, kappa=kappa)
         rn = simulate(pr, SolverOptions("newton"))
         ru = simulate(pr, SolverOptions("uzawa", tol=1e-11))
-        for a, b in [(ru.u, rn.u), (ru.wear, rn.wear), (ru.lam, rn.lam)]:
+        for a, b in [(ru.u, rn.u), (ru.wear, rn.wear), (ru.p_rigid, rn.p_rigid)]:
             assert rel(a, b) < 1e-8, (mu, kappa)
 
 
@@ -91,7 +91,7 @@ def test_every_step_meets_the_kkt_tolerance(method):
     d = pr.discrete
     for n in range(len(r.t)):
         u = r.u[n].ravel()[d.free]
-        lam = r.lam[n]
+        lam = r.p_rigid[n]
         y = d.system.N @ u
         assert np.all(y <= d.g * (1 + 1e-10))
         assert np.all(lam >= 0)
@@ -135,7 +135,7 @@ def test_wear_is_left_rectangle_rule_on_nonuniform_grid():
     pr = paper_problem(divisions=(16, 8), time=tg, kappa=2.0, v_star=(2.0, 0.0))
     r = simulate(pr)
     p = 0.4 * np.maximum(r.u_nu - r.wear, 0.0)
-    assert np.allclose(r.p, p, rtol=0, atol=1e-14)
+    assert np.allclose(r.p_soft, p, rtol=0, atol=1e-14)
     k = np.diff(r.t)
     expected = np.cumsum(
         np.vstack([np.zeros(r.wear.shape[1]), k[:, None] * 2.0 * 2.0 * p[:-1]]), axis=0

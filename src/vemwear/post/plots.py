@@ -45,8 +45,8 @@ QUANTITIES: dict[str, str] = {
     "wear": r"wear $w$",
     "u_nu": r"normal displacement $u_\nu$",
     "penetration": r"penetration $u_\nu - w$",
-    "lam": r"rigid-layer pressure $\lambda$",
-    "p": r"soft-layer pressure $p(u_\nu - w)$",
+    "p_rigid": r"rigid-layer pressure $\lambda$",
+    "p_soft": r"soft-layer pressure $p(u_\nu - w)$",
 }
 
 _ABSCISSA_LABEL = {

@@ -169,8 +169,8 @@ def write_vtk_series(
             ("wear", result.wear),
             ("u_nu", result.u_nu),
             ("penetration", result.penetration),
-            ("lam", result.lam),
-            ("p", result.p),
+            ("lam", result.p_rigid),
+            ("p", result.p_soft),
         ):
             full = np.zeros(n)
             full[nodes] = np.asarray(arr[lv])

@@ -72,8 +72,8 @@ class Result:
     u_levels : (S,) indices of the levels whose displacement is stored
     contact_nodes : (m,) vertex ids on Gamma_C, ordered along it
     contact_s : (m,) arc length along Gamma_C; contact_points : (m, 2)
-    wear, u_nu, penetration, lam, p : (L, m) at contact nodes; penetration = u_nu - wear,
-        lam and p are the pressures of the rigid and the soft layer
+    wear, u_nu, penetration, p_rigid, p_soft : (L, m) at contact nodes; penetration =
+        u_nu - wear; p_rigid and p_soft are the pressures of the rigid and the soft layer
     iterations : (L,) solver iterations per level
     residuals : (L, 3) KKT residuals (equilibrium, feasibility, complementarity)
     completed : number of finished levels (``L`` unless the run was interrupted)
@@ -88,8 +88,8 @@ class Result:
     contact_points: NDArray[np.float64]
     wear: NDArray[np.float64]
     u_nu: NDArray[np.float64]
-    lam: NDArray[np.float64]
-    p: NDArray[np.float64]
+    p_rigid: NDArray[np.float64]
+    p_soft: NDArray[np.float64]
     iterations: NDArray[np.int64]
     residuals: NDArray[np.float64]
     u_levels: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
@@ -195,8 +195,8 @@ def simulate(
         contact_points=d.contact.points.copy(),
         wear=np.zeros((L, m)),
         u_nu=np.zeros((L, m)),
-        lam=np.zeros((L, m)),
-        p=np.zeros((L, m)),
+        p_rigid=np.zeros((L, m)),
+        p_soft=np.zeros((L, m)),
         iterations=np.zeros(L, dtype=np.int64),
         residuals=np.zeros((L, 3)),
         u_levels=u_levels,
@@ -220,11 +220,11 @@ def simulate(
             return
         X = step_solver.recover_many(
             [st for _, st, _ in pending],
-            [so.lam for _, _, so in pending],
-            [so.p for _, _, so in pending],
+            [so.p_rigid for _, _, so in pending],
+            [so.p_soft for _, _, so in pending],
         )
         for j, (n_, st, so) in enumerate(pending):
-            full = kkt_residuals(sysm, st, X[:, j], so.lam)
+            full = kkt_residuals(sysm, st, X[:, j], so.p_rigid)
             check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)
             out.u[slot[n_]] = d.full_displacement(X[:, j])
             out.residuals[n_] = [full[k] for k in Result.RESIDUAL_NAMES]
@@ -243,7 +243,8 @@ def simulate(
             step = d.step_data(n, w)
             store_here = bool(slot[n] >= 0)
             sol = step_solver.solve(step, guess, recover=store_here and not batch)
-            out.wear[n], out.u_nu[n], out.lam[n], out.p[n] = w, sol.u_nu, sol.lam, sol.p
+            out.wear[n], out.u_nu[n] = w, sol.u_nu
+            out.p_rigid[n], out.p_soft[n] = sol.p_rigid, sol.p_soft
             out.iterations[n] = sol.iterations
             out.residuals[n] = [sol.residuals[k] for k in Result.RESIDUAL_NAMES]
             if store_here:
@@ -258,7 +259,7 @@ def simulate(
             if callback is not None:
                 callback(n, sol)
             if n + 1 < L:  # wear update (3.22), left rectangle rule
-                w = w + (tgrid[n + 1] - tgrid[n]) * d.alpha(step.t) * sol.p
+                w = w + (tgrid[n + 1] - tgrid[n]) * d.alpha(step.t) * sol.p_soft
             guess = sol
             if not pending:  # every level so far is complete, displacements included
                 out.completed = n + 1
@@ -280,7 +281,7 @@ def _truncate(r: Result) -> Result:
     c = r.completed
     keep = r.u_levels < c
     arrays = {
-        k: getattr(r, k).copy() for k in ("wear", "u_nu", "lam", "p", "iterations", "residuals")
+        k: getattr(r, k).copy() for k in ("wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals")
     }
     for a in arrays.values():
         a[c:] = 0
@@ -300,7 +301,7 @@ def _restart(
         raise ValueError("resume: the partial result has other contact nodes (another mesh?)")
     if c <= 0:
         return np.zeros(out.wear.shape[1]), None
-    for name in ("wear", "u_nu", "lam", "p", "iterations", "residuals"):
+    for name in ("wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals"):
         getattr(out, name)[:c] = getattr(prev, name)[:c]
     for j, lv in enumerate(prev.u_levels):
         if lv < c and slot[lv] >= 0:
@@ -313,15 +314,15 @@ def _restart(
     out.completed = c
     if c == len(out.t):
         return out.wear[-1].copy(), None
-    w = out.wear[c - 1] + (out.t[c] - out.t[c - 1]) * d.alpha(float(out.t[c - 1])) * out.p[c - 1]
+    w = out.wear[c - 1] + (out.t[c] - out.t[c - 1]) * d.alpha(float(out.t[c - 1])) * out.p_soft[c - 1]
     u_last = None
     if slot[c - 1] >= 0:
         u_last = out.u[slot[c - 1]].ravel()[d.free]
     guess = StepSolution(
         u=u_last,
         u_nu=out.u_nu[c - 1].copy(),
-        lam=out.lam[c - 1].copy(),
-        p=out.p[c - 1].copy(),
+        p_rigid=out.p_rigid[c - 1].copy(),
+        p_soft=out.p_soft[c - 1].copy(),
         iterations=0,
         residuals={},
     )

@@ -161,7 +161,7 @@ class Discretization:
             contact_dofs=cdofs,
             normals=cb.normals,
             tangents=cb.tangents,
-            omega=cb.weights,
+            weights=cb.weights,
             g=self.g,
             p=problem.p,
             dof_points=mesh.points[self.free // 2],
@@ -210,7 +210,7 @@ class Discretization:
         import scipy.sparse.linalg as spla
 
         s = self.system
-        Mc = (s.N.T @ sp.diags(s.omega) @ s.N + s.Tau.T @ sp.diags(s.omega) @ s.Tau).tocsc()
+        Mc = (s.N.T @ sp.diags(s.weights) @ s.N + s.Tau.T @ sp.diags(s.weights) @ s.Tau).tocsc()
         try:
             vals = spla.eigsh(Mc, k=1, M=s.K.tocsc(), which="LA", return_eigenvectors=False)
             ratio = float(vals[0])  # max of ||v||^2_Gc / a_h(v, v) = c_0^2 / C_1

@@ -1,8 +1,8 @@
 """Semismooth (primal-dual active-set) Newton methods for the step problem.
 
-The complementarity conditions ``lam >= 0, N u <= g, lam (N u - g) = 0`` are written
-as ``lam = max(0, lam + c (N u - g))``; its generalized derivative splits the contact
-nodes into an active set (``N u = g``) and an inactive set (``lam = 0``), and
+The complementarity conditions ``p_rigid >= 0, N u <= g, p_rigid (N u - g) = 0`` are written
+as ``p_rigid = max(0, p_rigid + c (N u - g))``; its generalized derivative splits the contact
+nodes into an active set (``N u = g``) and an inactive set (``p_rigid = 0``), and
 ``p`` contributes its generalized derivative ``p'``.
 
 * :class:`CondensedNewton` works on the contact unknowns only. The stiffness never
@@ -50,23 +50,23 @@ def _reduced_matrix(J11, J12, active):
     return np.hstack([J11[:, ~active], J12[:, active]])
 
 
-def _active_set_step(lu, J11, J12, y, lam, R, active, g):
-    """Solve the Newton system for (dy, dlam) with dy_A = g_A - y_A and dlam_I = -lam_I.
+def _active_set_step(lu, J11, J12, y, p_rigid, R, active, g):
+    """Solve the Newton system for (dy, dp_rigid) with dy_A = g_A - y_A and dlam_I = -lam_I.
 
-    ``J11 dy + J12 dlam = -R`` (m equations); the unknowns are dy_I and dlam_A, and
+    ``J11 dy + J12 dp_rigid = -R`` (m equations); the unknowns are dy_I and dlam_A, and
     ``lu`` factorizes their columns (:func:`_reduced_matrix`).
     """
     inactive = ~active
     dy = np.zeros_like(y)
-    dlam = np.zeros_like(lam)
+    dp_rigid = np.zeros_like(p_rigid)
     dy[active] = g[active] - y[active]
-    dlam[inactive] = -lam[inactive]
-    rhs = -R - J11[:, active] @ dy[active] - J12[:, inactive] @ dlam[inactive]
+    dp_rigid[inactive] = -p_rigid[inactive]
+    rhs = -R - J11[:, active] @ dy[active] - J12[:, inactive] @ dp_rigid[inactive]
     sol = sla.lu_solve(lu, rhs)
     ni = int(inactive.sum())
     dy[inactive] = sol[:ni]
-    dlam[active] = sol[ni:]
-    return dy, dlam
+    dp_rigid[active] = sol[ni:]
+    return dy, dp_rigid
 
 
 class CondensedNewton:
@@ -90,7 +90,7 @@ class CondensedNewton:
         nu, tau = system.normals, system.tangents
         self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
         self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
-        self.A_norm = self.C_NN * system.omega[None, :]
+        self.A_norm = self.C_NN * system.weights[None, :]
         self._eye = np.eye(m)
         self._lu_cache: dict[bytes, tuple] = {}
         self._fric_key: bytes | None = None
@@ -105,14 +105,14 @@ class CondensedNewton:
         return self._d  # type: ignore[return-value]
 
     def recover_many(
-        self, steps: list[StepData], lams: list[NDArray], ps: list[NDArray]
+        self, steps: list[StepData], p_rigids: list[NDArray], p_softs: list[NDArray]
     ) -> NDArray:
         """Full displacements of several levels with one block solve, shape (nf, len(steps))."""
         s = self.system
         rhs = np.column_stack(
             [
-                st.F - s.layer_forces(lam, pa, st.fric)
-                for st, lam, pa in zip(steps, lams, ps, strict=True)
+                st.F - s.layer_forces(p_rigid, p_soft, st.fric)
+                for st, p_rigid, p_soft in zip(steps, p_rigids, p_softs, strict=True)
             ]
         )
         return self.factor.solve(rhs)
@@ -120,7 +120,7 @@ class CondensedNewton:
     def solve(
         self, step: StepData, guess: StepSolution | None = None, recover: bool = True
     ) -> StepSolution:
-        """Solve one step problem on the contact unknowns (y = N u, lam).
+        """Solve one step problem on the contact unknowns (y = N u, p_rigid).
 
         With ``recover=False`` the full displacement is not computed (``u`` is None);
         :meth:`recover_many` computes it later for several levels at once.
@@ -128,11 +128,11 @@ class CondensedNewton:
         s, opt = self.system, self.options
         d = self._normal_displacement_of_load(step.F)
         if guess is not None:
-            y, lam = np.array(guess.u_nu, copy=True), np.array(guess.lam, copy=True)
+            y, p_rigid = np.array(guess.u_nu, copy=True), np.array(guess.p_rigid, copy=True)
         else:
-            y, lam = np.minimum(d, s.g), np.zeros(s.m)
+            y, p_rigid = np.minimum(d, s.g), np.zeros(s.m)
         A_norm = self.A_norm
-        A_fric = self.C_NT * (s.omega * step.fric)[None, :]
+        A_fric = self.C_NT * (s.weights * step.fric)[None, :]
         fric_key = step.fric.tobytes()
         if fric_key != self._fric_key:  # the Newton matrices depend on the friction direction
             self._lu_cache.clear()
@@ -140,13 +140,13 @@ class CondensedNewton:
         it = 0
         while True:
             r = y - step.w
-            pa, dp = s.p(r), s.p.derivative(r)
-            R = y - d + A_norm @ (pa + lam) + A_fric @ pa
-            res = condensed_residuals(s, y, lam, R)
+            p_soft, dp = s.p(r), s.p.derivative(r)
+            R = y - d + A_norm @ (p_soft + p_rigid) + A_fric @ p_soft
+            res = condensed_residuals(s, y, p_rigid, R)
             if max(res.values()) <= 0.1 * opt.tol or it == opt.max_iter:
                 break
             it += 1
-            active = lam + s.c_ncp * (y - s.g) > 0
+            active = p_rigid + s.c_ncp * (y - s.g) > 0
             J11 = self._eye + (A_norm + A_fric) * dp[None, :]
             key = active.tobytes() + dp.tobytes()
             lu = self._lu_cache.get(key)
@@ -155,17 +155,17 @@ class CondensedNewton:
                 if len(self._lu_cache) >= 8:
                     self._lu_cache.pop(next(iter(self._lu_cache)))
                 self._lu_cache[key] = lu
-            dy, dlam = _active_set_step(lu, J11, A_norm, y, lam, R, active, s.g)
-            y, lam = y + dy, lam + dlam
-        lam = np.maximum(lam, 0.0)
-        pa = s.p(y - step.w)
+            dy, dp_rigid = _active_set_step(lu, J11, A_norm, y, p_rigid, R, active, s.g)
+            y, p_rigid = y + dy, p_rigid + dp_rigid
+        p_rigid = np.maximum(p_rigid, 0.0)
+        p_soft = s.p(y - step.w)
         u = None
         if recover:
-            u = self.recover_many([step], [lam], [pa])[:, 0]
-            res = kkt_residuals(s, step, u, lam)
+            u = self.recover_many([step], [p_rigid], [p_soft])[:, 0]
+            res = kkt_residuals(s, step, u, p_rigid)
             y = s.N @ u
         check_converged(res, opt.tol, step, "semismooth Newton (condensed)", it)
-        return StepSolution(u=u, u_nu=y, lam=lam, p=pa, iterations=it, residuals=res)
+        return StepSolution(u=u, u_nu=y, p_rigid=p_rigid, p_soft=p_soft, iterations=it, residuals=res)
 
 
 class FullNewton:
@@ -182,39 +182,39 @@ class FullNewton:
     ) -> StepSolution:
         s, opt = self.system, self.options
         if guess is not None and guess.u is not None:
-            u, lam = np.array(guess.u, copy=True), np.array(guess.lam, copy=True)
+            u, p_rigid = np.array(guess.u, copy=True), np.array(guess.p_rigid, copy=True)
         else:
-            u, lam = np.zeros(s.n_free), np.zeros(s.m)
-        N, Tau, om = s.N, s.Tau, s.omega
+            u, p_rigid = np.zeros(s.n_free), np.zeros(s.m)
+        N, Tau, weights = s.N, s.Tau, s.weights
         it = 0
         while it < opt.max_iter:
             it += 1
             y = N @ u
-            pa, dp = s.p(y - step.w), s.p.derivative(y - step.w)
-            active = lam + s.c_ncp * (y - s.g) > 0
-            J = s.K + N.T @ sp.diags(om * dp) @ N + Tau.T @ sp.diags(om * step.fric * dp) @ N
-            # residual without the rigid-layer term: lam_new enters the system directly
-            r0 = s.K @ u - step.F + s.layer_forces(0.0, pa, step.fric)
+            p_soft, dp = s.p(y - step.w), s.p.derivative(y - step.w)
+            active = p_rigid + s.c_ncp * (y - s.g) > 0
+            J = s.K + N.T @ sp.diags(weights * dp) @ N + Tau.T @ sp.diags(weights * step.fric * dp) @ N
+            # residual without the rigid-layer term: p_rigid_new enters the system directly
+            r0 = s.K @ u - step.F + s.layer_forces(0.0, p_soft, step.fric)
             if np.any(active):  # saddle point with the active constraints N_A u = g_A
                 NA = N[np.flatnonzero(active)]
-                M = sp.bmat([[J, NA.T @ sp.diags(om[active])], [NA, None]], format="csc")
+                M = sp.bmat([[J, NA.T @ sp.diags(weights[active])], [NA, None]], format="csc")
                 rhs = np.concatenate([-r0, s.g[active] - NA @ u])
             else:
                 M, rhs = sp.csc_matrix(J), -r0
             sol = factorize(M, opt.backend, symmetric=False, many_factorizations=True).solve(rhs)
             du = sol[: s.n_free]
-            lam_new = np.zeros(s.m)
-            lam_new[active] = sol[s.n_free :]
-            u, lam = u + du, lam_new
+            p_rigid_new = np.zeros(s.m)
+            p_rigid_new[active] = sol[s.n_free :]
+            u, p_rigid = u + du, p_rigid_new
             if np.abs(du).max() <= 1e-14 * max(
                 np.abs(u).max(), float(np.abs(s.g).max())
-            ) and np.array_equal(active, lam + s.c_ncp * (N @ u - s.g) > 0):
+            ) and np.array_equal(active, p_rigid + s.c_ncp * (N @ u - s.g) > 0):
                 break
-        lam = np.maximum(lam, 0.0)
-        res = kkt_residuals(s, step, u, lam)
+        p_rigid = np.maximum(p_rigid, 0.0)
+        res = kkt_residuals(s, step, u, p_rigid)
         check_converged(res, opt.tol, step, "semismooth Newton (full)", it)
         y = N @ u
-        return StepSolution(u=u, u_nu=y, lam=lam, p=s.p(y - step.w), iterations=it, residuals=res)
+        return StepSolution(u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=it, residuals=res)
 
 
 __all__ = ["CondensedNewton", "ConvergenceError", "FullNewton", "NewtonOptions"]

@@ -1,17 +1,17 @@
 """The paper's reference solver: an Uzawa iteration with two multipliers (Glowinski).
 
-The two multipliers are the pressure ``lam`` of the rigid layer (for the unilateral
+The two multipliers are the pressure ``p_rigid`` of the rigid layer (for the unilateral
 constraint ``N u <= g``) and the pressure ``q`` of the soft layer (for the normal
 compliance term, which the iteration freezes). One iteration is one
 back-substitution with the factorization of K, then an update of both multipliers:
 
-    K u = F - N^T(omega (q + lam)) - Tau^T(omega fric q)
-    lam <- max(0, lam + rho_1 (N u - g))              (projected gradient ascent)
+    K u = F - N^T(weights (q + p_rigid)) - Tau^T(weights fric q)
+    p_rigid <- max(0, p_rigid + rho_1 (N u - g))              (projected gradient ascent)
     q   <- q + rho_2 (p(N u - w) - q)                  (relaxed fixed point)
 
-``rho_1 = 1 / ||omega C_NN||`` and ``rho_2 = 1 / (1 + L_p ||omega C_NN||)`` with
-``||omega C_NN||`` estimated once by power iteration. The iteration stops when the
-KKT residuals of ``(u, lam)`` are below the tolerance.
+``rho_1 = 1 / ||weights C_NN||`` and ``rho_2 = 1 / (1 + L_p ||weights C_NN||)`` with
+``||weights C_NN||`` estimated once by power iteration. The iteration stops when the
+KKT residuals of ``(u, p_rigid)`` are below the tolerance.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ class Uzawa:
     def _compliance_norm(self, iterations: int = 50) -> float:
         """Largest eigenvalue of ``W^(1/2) C_NN W^(1/2)``, by power iteration."""
         s = self.system
-        sq = np.sqrt(s.omega)
+        sq = np.sqrt(s.weights)
         x = np.ones(s.m) / np.sqrt(s.m)
         val = 0.0
         for _ in range(iterations):
@@ -74,22 +74,22 @@ class Uzawa:
     ) -> StepSolution:
         s, opt = self.system, self.options
         if guess is not None:
-            lam, q = np.array(guess.lam, copy=True), np.array(guess.p, copy=True)
+            p_rigid, q = np.array(guess.p_rigid, copy=True), np.array(guess.p_soft, copy=True)
         else:
-            lam, q = np.zeros(s.m), np.zeros(s.m)
+            p_rigid, q = np.zeros(s.m), np.zeros(s.m)
         u: NDArray = np.zeros(s.n_free)
         res: dict[str, float] = {}
         it = 0
         for it in range(1, opt.max_iter + 1):
-            u = self.factor.solve(step.F - s.layer_forces(lam, q, step.fric))
+            u = self.factor.solve(step.F - s.layer_forces(p_rigid, q, step.fric))
             y = s.N @ u
             if it % opt.check_every == 0:
-                res = kkt_residuals(s, step, u, lam)
+                res = kkt_residuals(s, step, u, p_rigid)
                 if max(res.values()) <= opt.tol:
                     break
-            lam = np.maximum(0.0, lam + self.rho1 * (y - s.g))
+            p_rigid = np.maximum(0.0, p_rigid + self.rho1 * (y - s.g))
             q = q + self.rho2 * (s.p(y - step.w) - q)
-        res = kkt_residuals(s, step, u, lam)
+        res = kkt_residuals(s, step, u, p_rigid)
         check_converged(res, opt.tol, step, "Uzawa", it)
         y = s.N @ u
-        return StepSolution(u=u, u_nu=y, lam=lam, p=s.p(y - step.w), iterations=it, residuals=res)
+        return StepSolution(u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=it, residuals=res)
