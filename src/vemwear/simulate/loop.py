@@ -281,7 +281,8 @@ def _truncate(r: Result) -> Result:
     c = r.completed
     keep = r.u_levels < c
     arrays = {
-        k: getattr(r, k).copy() for k in ("wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals")
+        k: getattr(r, k).copy()
+        for k in ("wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals")
     }
     for a in arrays.values():
         a[c:] = 0
@@ -314,7 +315,10 @@ def _restart(
     out.completed = c
     if c == len(out.t):
         return out.wear[-1].copy(), None
-    w = out.wear[c - 1] + (out.t[c] - out.t[c - 1]) * d.alpha(float(out.t[c - 1])) * out.p_soft[c - 1]
+    w = (
+        out.wear[c - 1]
+        + (out.t[c] - out.t[c - 1]) * d.alpha(float(out.t[c - 1])) * out.p_soft[c - 1]
+    )
     u_last = None
     if slot[c - 1] >= 0:
         u_last = out.u[slot[c - 1]].ravel()[d.free]

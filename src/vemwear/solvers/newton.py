@@ -165,7 +165,9 @@ class CondensedNewton:
             res = kkt_residuals(s, step, u, p_rigid)
             y = s.N @ u
         check_converged(res, opt.tol, step, "semismooth Newton (condensed)", it)
-        return StepSolution(u=u, u_nu=y, p_rigid=p_rigid, p_soft=p_soft, iterations=it, residuals=res)
+        return StepSolution(
+            u=u, u_nu=y, p_rigid=p_rigid, p_soft=p_soft, iterations=it, residuals=res
+        )
 
 
 class FullNewton:
@@ -192,7 +194,11 @@ class FullNewton:
             y = N @ u
             p_soft, dp = s.p(y - step.w), s.p.derivative(y - step.w)
             active = p_rigid + s.c_ncp * (y - s.g) > 0
-            J = s.K + N.T @ sp.diags(weights * dp) @ N + Tau.T @ sp.diags(weights * step.fric * dp) @ N
+            J = (
+                s.K
+                + N.T @ sp.diags(weights * dp) @ N
+                + Tau.T @ sp.diags(weights * step.fric * dp) @ N
+            )
             # residual without the rigid-layer term: p_rigid_new enters the system directly
             r0 = s.K @ u - step.F + s.layer_forces(0.0, p_soft, step.fric)
             if np.any(active):  # saddle point with the active constraints N_A u = g_A
@@ -214,7 +220,9 @@ class FullNewton:
         res = kkt_residuals(s, step, u, p_rigid)
         check_converged(res, opt.tol, step, "semismooth Newton (full)", it)
         y = N @ u
-        return StepSolution(u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=it, residuals=res)
+        return StepSolution(
+            u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=it, residuals=res
+        )
 
 
 __all__ = ["CondensedNewton", "ConvergenceError", "FullNewton", "NewtonOptions"]

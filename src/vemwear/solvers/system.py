@@ -78,7 +78,9 @@ class ContactSystem:
     def layer_forces(self, p_rigid: NDArray, p_soft: NDArray, fric: NDArray) -> NDArray:
         """Nodal forces of the rigid and the soft layer,
         ``N^T(weights (p_soft + p_rigid)) + Tau^T(weights fric p_soft)``."""
-        return self.N.T @ (self.weights * (p_soft + p_rigid)) + self.Tau.T @ (self.weights * fric * p_soft)
+        return self.N.T @ (self.weights * (p_soft + p_rigid)) + self.Tau.T @ (
+            self.weights * fric * p_soft
+        )
 
     def contact_force(self, u: NDArray, p_rigid: NDArray, fric: NDArray, w: NDArray):
         """The contact term of the residual and the soft-layer pressure at ``u``."""

@@ -92,4 +92,6 @@ class Uzawa:
         res = kkt_residuals(s, step, u, p_rigid)
         check_converged(res, opt.tol, step, "Uzawa", it)
         y = s.N @ u
-        return StepSolution(u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=it, residuals=res)
+        return StepSolution(
+            u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=it, residuals=res
+        )
