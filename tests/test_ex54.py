@@ -22,13 +22,14 @@ from vemwear.mesh import (
     Mesh,
     check_mesh,
     l_shape_domain,
+    locate_cells,
     refine_along,
     voronoi_from_seeds,
     voronoi_mesh,
 )
 from vemwear.paper import EXAMPLES, ex54, load_example
 from vemwear.simulate import SolverOptions, simulate
-from vemwear.vem import STABILIZATIONS, Material, stiffness
+from vemwear.vem import STABILIZATIONS, Material, Projection, stiffness
 
 ROOT = Path(__file__).resolve().parents[1]
 SCIPY = SolverOptions(backend="scipy")
@@ -122,49 +123,18 @@ def test_patch_test_every_family(name: str, stab: str) -> None:
 
 # ----------------------------------------------------------------------------- Pi u at points
 @pytest.mark.parametrize("name", ["voronoi", "hanging+refine2", "nonconvex", "triangles"])
-def test_evaluate_projection_reproduces_linear_fields(name: str) -> None:
+def test_projection_at_probe_points_reproduces_linear_fields(name: str) -> None:
+    """The probes of Example 5.4 evaluate Pi u of the containing cell (the operator)."""
     mesh = PATCH_MESHES[name]
     rng = np.random.default_rng(1)
     A, b = rng.normal(size=(2, 2)), rng.normal(size=2)
     pts = rng.uniform([0, 0], [2, 1], size=(300, 2))
     pts = np.vstack([pts, mesh.points[:20], [[0.0, 0.0], [2.0, 1.0], [1.0, 0.0]]])
-    cells = ex54.locate_cells(mesh, pts)
-    assert np.all(cells >= 0)
-    val = ex54.evaluate_projection(mesh, mesh.points @ A.T + b, pts, cells)
-    np.testing.assert_allclose(val, pts @ A.T + b, atol=1e-12)
-    with pytest.raises(ValueError, match="outside the mesh"):
-        ex54.evaluate_projection(mesh, mesh.points, [[3.0, 0.5]])
-
-
-def test_locate_cells_finds_the_containing_polygon() -> None:
-    mesh = PATCH_MESHES["nonconvex"]  # chevrons: the nearest centre is often the wrong cell
-    rng = np.random.default_rng(2)
-    pts = rng.uniform([0, 0], [2, 1], size=(500, 2))
-    cells = ex54.locate_cells(mesh, pts)
-    from matplotlib.path import Path as MplPath
-
-    for p, c in zip(pts, cells, strict=True):
-        assert MplPath(mesh.points[mesh.cell(c)]).contains_point(p)
-
-
-def test_locate_cells_on_cell_boundaries_and_outside() -> None:
-    """Vertices and edge midpoints (claimed by no crossing test on some cell) go to a cell
-    whose boundary holds them; points outside the domain get -1."""
-    from vemwear.post.errors import locate_cells
-
-    assert ex54.locate_cells is locate_cells
-    mesh = PATCH_MESHES["nonconvex"]
-    e = mesh.edges
-    on = np.vstack([mesh.points, 0.5 * (mesh.points[e[:, 0]] + mesh.points[e[:, 1]])])
-    pts = np.vstack([on, [[-0.5, 0.5], [2.5, 0.5], [1.0, 1.5]]])
     cells = locate_cells(mesh, pts)
-    np.testing.assert_array_equal(cells[len(on) :], -1)
-    assert np.all(cells[: len(on)] >= 0)
-    for p, c in zip(on, cells[: len(on)], strict=True):
-        X = mesh.points[mesh.cell(c)]
-        A, B = X, np.roll(X, -1, axis=0)
-        s = np.clip(np.sum((p - A) * (B - A), axis=1) / np.sum((B - A) ** 2, axis=1), 0, 1)
-        assert np.min(np.linalg.norm(p - (A + s[:, None] * (B - A)), axis=1)) < 1e-12
+    assert np.all(cells >= 0)
+    pi, u = Projection(mesh), mesh.points @ A.T + b
+    np.testing.assert_allclose(pi.evaluate(u, pts, cells), pts @ A.T + b, atol=1e-12)
+    np.testing.assert_allclose(pi.evaluate(u, pts), pts @ A.T + b, atol=1e-12)
 
 
 def test_shared_vertices_are_the_corners_for_unrelated_meshes() -> None:

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from vemwear.cli.main import main
-from vemwear.paper import EXAMPLES, ex53, ex55
-from vemwear.post.errors import Comparison, convergence_orders
+from vemwear.paper import EXAMPLES, ex53, ex55, ex55_study
+from vemwear.post.compare import Comparison, convergence_orders
 from vemwear.simulate import SolverOptions, simulate
 
 
@@ -128,13 +128,13 @@ def test_ex55_run_writes_outputs_and_uses_cache(tmp_path: Path) -> None:
     assert "7.0581e-02" in t1  # the paper's number (h = 1/4) beside ours
     assert "1.1153e-01" in (out / "table2.md").read_text()
     csv = (out / "errors.csv").read_text().splitlines()
-    assert len(csv) == 3 and csv[0].startswith("inv_h,h,k,u_H1_T")
+    assert len(csv) == 3 and csv[0].startswith("inv_h,h,k,u_H1,u_H1_order,u_H1_max")
     # the second run reuses the reference and gives the same tables
     out2 = tmp_path / "out2"
     out2.mkdir()
     ex2 = ex55.run(out2, levels=(2, 4), reference=8, cache=cache, figures=False, vtk=False)
     assert ex2.details["reference_info"]["cached"]
-    assert ex2.details["tables"]["u_H1_T"]["errors"] == ex.details["tables"]["u_H1_T"]["errors"]
+    assert ex2.details["tables"]["u_H1"]["errors"] == ex.details["tables"]["u_H1"]["errors"]
     # other inputs (the solver tolerance), another cache entry
     out3 = tmp_path / "out3"
     out3.mkdir()
@@ -149,6 +149,26 @@ def test_ex55_run_writes_outputs_and_uses_cache(tmp_path: Path) -> None:
     )
     assert not ex3.details["reference_info"]["cached"]
     assert len(list(cache.glob("*.json"))) == 2
+
+
+def test_ex55_wear_error_study_small(tmp_path: Path) -> None:
+    """The space / time split of the wear error (docs/paper.md, Table 2) at a small size:
+    the h = k runs of the study are those of the tables; the time part dominates; the
+    first step's error follows (k - k_ref) rho(0) / 2; the rates decay no faster than
+    alpha L_p (u_nu does not decrease)."""
+    ex = ex55.run(tmp_path, levels=(2, 4), reference=8, cache=None, figures=False, study=True)
+    st = ex.details["study"]
+    assert [r["full"] for r in st["rows"]] == ex.details["tables"]["w_L2"]["errors"]
+    for r in st["rows"]:
+        assert r["time"] > 3.0 * r["space"] > 0, r
+        assert r["first_step"] == pytest.approx(r["first_step_predicted"], rel=0.15), r
+        assert np.isnan(r["paper"])  # the paper's numbers need the 1/256 reference
+    rates = st["rates"]
+    assert 0.3 < rates["rho0"] < rates["rho_max"] <= rates["rho_bound"] * (1 + 1e-9)
+    assert "space only" in (tmp_path / "table2_study.md").read_text()
+    assert "table2_study.md" in ex.files
+    with pytest.raises(ValueError, match="unknown runs"):
+        ex55_study.wear_error_study(levels=(2,), reference=8, runs=("bogus",))
 
 
 def test_cli_example_55_and_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

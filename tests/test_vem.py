@@ -17,11 +17,12 @@ from vemwear.mesh import Mesh, check_mesh, tag_rectangle
 from vemwear.vem import (
     STABILIZATIONS,
     Material,
+    Projection,
     body_force_vector,
     cell_means,
     edge_load_vector,
     element_matrices,
-    projection_coefficients,
+    project,
     stiffness,
     traction_vector,
 )
@@ -606,26 +607,91 @@ def test_edge_load_exact_for_linear_traction(poly_mesh):
     assert np.isclose(v(mesh.points).ravel() @ Ft.ravel(), simpson, rtol=1e-13)
 
 
-# ----------------------------------------------------------------------------- 5. Pi u per cell
-def test_projection_coefficients(poly_mesh):
+# ----------------------------------------------------------------------------- 5. Pi as an operator
+def check_definition(X, V, G, value, tol):
+    """Pi v = value + G (x - xbar) on the polygon X with vertex values V satisfies
+    (3.8) (strain = boundary strain), (3.9) and (3.10) in the paper's form (with x_i)."""
+    h = np.ptp(X, axis=0).max()
+    PV = value + (X - X.mean(axis=0)) @ G.T
+    E = boundary_strain(X, V)
+    scale = np.abs(V).max()
+    assert np.allclose(0.5 * (G + G.T), E, rtol=0, atol=tol * scale / h)  # (3.8)
+    assert np.allclose(PV.mean(axis=0), V.mean(axis=0), rtol=0, atol=tol * scale)  # (3.9)
+    lhs, rhs = cross2(X, PV).mean(), cross2(X, V).mean()  # (3.10)
+    assert abs(lhs - rhs) <= tol * scale * np.abs(X).max()
+
+
+@pytest.mark.parametrize("kind", ["convex", "star"])
+def test_projection_operator_definition_on_random_polygons(kind):
+    """The global operator on cells of 3 ... 12 vertices, all in one mesh (batched by
+    vertex count), against (3.8)-(3.10); it reproduces linear fields."""
+    rng = np.random.default_rng(21 if kind == "convex" else 22)
+    polys = [random_polygons(kind, n, 3, rng) for n in range(3 if kind == "convex" else 4, 13)]
+    X = np.concatenate([p.reshape(-1, 2) for p in polys])
+    cells, start = [], 0
+    for p in polys:
+        for _ in range(len(p)):
+            cells.append(np.arange(start, start + p.shape[1]))
+            start += p.shape[1]
+    mesh = Mesh.from_cells(X, cells)
+    pi = Projection(mesh)
+    v = rng.normal(size=(mesh.n_points, 2))
+    f = pi(v)
+    for k, c in enumerate(mesh.cells):
+        Xk = mesh.points[c]
+        c_rel = 1 + np.abs(Xk).max() / np.ptp(Xk, axis=0).max()
+        check_definition(Xk, v[c], f.gradient[k], f.value[k], 1e-12 * c_rel)
+        assert np.allclose(f.xbar[k], Xk.mean(axis=0), rtol=0, atol=1e-13 * np.abs(Xk).max())
+    # the strain and the rotation are the parts of the gradient
+    np.testing.assert_allclose(pi.strain(v), 0.5 * (f.gradient + f.gradient.transpose(0, 2, 1)))
+    np.testing.assert_allclose(f.rotation, 0.5 * (f.gradient[:, 1, 0] - f.gradient[:, 0, 1]))
+    # linear fields are reproduced exactly, also at points inside the cells
+    A, b = rng.normal(size=(2, 2)), rng.normal(size=2)
+    lin = pi(mesh.points @ A.T + b)
+    scale = 1 + np.abs(mesh.points).max()
+    np.testing.assert_allclose(lin.gradient, np.broadcast_to(A, lin.gradient.shape), atol=1e-10)
+    pts = mesh.points[[c[0] for c in mesh.cells]] * 0.5 + 0.5 * lin.xbar
+    np.testing.assert_allclose(
+        lin.at(pts, np.arange(mesh.n_cells)), pts @ A.T + b, atol=1e-11 * scale
+    )
+
+
+def test_projection_operator_matches_element_projection(poly_mesh):
+    """The global operator and the element matrices share one formula for the rotation:
+    the vertex values of Pi v from either agree."""
+    _name, mesh = poly_mesh
+    v = np.random.default_rng(3).normal(size=(mesh.n_points, 2))
+    f = project(mesh, v)
+    for _n, (ids, verts) in mesh.groups.items():
+        _K, _B, P, _a = element_matrices(mesh.points[verts], MAT)
+        from_P = np.einsum("mij,mj->mi", P, v[verts].reshape(len(ids), -1))
+        X = mesh.points[verts]
+        from_f = f.value[ids, None, :] + np.einsum(
+            "mab,mib->mia", f.gradient[ids], X - f.xbar[ids, None, :]
+        )
+        np.testing.assert_allclose(from_P, from_f.reshape(len(ids), -1), atol=1e-12)
+
+
+def test_projection_operator_on_meshes(poly_mesh):
     name, mesh = poly_mesh
     A, b = linear_field(6)
     u = mesh.points @ A.T + b
-    xbar, vbar, G = projection_coefficients(mesh, u.ravel())
-    assert np.allclose(G, A[None], rtol=0, atol=1e-12 * np.abs(A).max()), name
-    # Pi u(x) = vbar + G (x - xbar) reproduces u at every vertex of every cell
+    f = project(mesh, u.ravel())
+    assert np.allclose(f.gradient, A[None], rtol=0, atol=1e-12 * np.abs(A).max()), name
     for k, c in enumerate(mesh.cells):
         X = mesh.points[c]
-        assert np.allclose(xbar[k], X.mean(axis=0), rtol=0, atol=1e-15)
-        assert np.allclose(vbar[k] + (X - xbar[k]) @ G[k].T, u[c], rtol=0, atol=1e-12)
-    # a non-linear u: sym G is the boundary strain, (3.9) by construction, (3.10) holds
+        assert np.allclose(f.xbar[k], X.mean(axis=0), rtol=0, atol=1e-15)
+        assert np.allclose(f.at(X, np.full(len(c), k)), u[c], rtol=0, atol=1e-12)
     w = np.random.default_rng(8).normal(size=(mesh.n_points, 2))
-    xbar, vbar, G = projection_coefficients(mesh, w.ravel())
+    f = project(mesh, w)
     for k, c in enumerate(mesh.cells):
-        X, V = mesh.points[c], w[c]
-        E = boundary_strain(X, V)
-        assert np.allclose(0.5 * (G[k] + G[k].T), E, rtol=0, atol=1e-10 * np.abs(E).max())
-        assert np.allclose(vbar[k], V.mean(axis=0), rtol=0, atol=1e-14)
-        PiV = vbar[k] + (X - xbar[k]) @ G[k].T
-        d = X - X.mean(axis=0)
-        assert np.isclose(cross2(d, PiV).sum(), cross2(d, V).sum(), rtol=0, atol=1e-12)
+        check_definition(mesh.points[c], w[c], f.gradient[k], f.value[k], 1e-11)
+    # evaluation at points located in the mesh; points outside are an error
+    rng = np.random.default_rng(9)
+    pts = rng.uniform(0.0, 1.0, (200, 2))
+    pi = Projection(mesh)
+    np.testing.assert_allclose(pi.evaluate(u, pts), pts @ A.T + b, atol=1e-12)
+    with pytest.raises(ValueError, match="outside the mesh"):
+        pi.evaluate(u, [[2.0, 0.5]])
+    with pytest.raises(ValueError, match="expected 2 x"):
+        pi(np.zeros(3))

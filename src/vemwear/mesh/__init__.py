@@ -1,4 +1,5 @@
-"""Polygonal meshes: the mesh type, generators, boundary parts, checks and file I/O."""
+"""Polygonal meshes: the mesh type, generators, boundary parts, checks, file I/O and point
+location."""
 
 from .boundary import segment_predicate, side_predicate, tag_rectangle
 from .checks import check_mesh
@@ -12,6 +13,7 @@ from .families import (
 )
 from .generate import rectangle_squares, rectangle_triangles
 from .io import read_mesh, write_mesh
+from .locate import NonNestedMeshError, locate_cells, match_vertices, nested_cells
 from .polymesh import PARTS, Mesh, MeshError, part_code
 from .quality import QualityReport, kernel_disks, quality_report
 from .refine import refine_along, refine_cells, refine_where
@@ -28,12 +30,16 @@ __all__ = [
     "PARTS",
     "Mesh",
     "MeshError",
+    "NonNestedMeshError",
     "QualityReport",
     "check_mesh",
     "distorted_quads",
     "hexagons",
     "kernel_disks",
     "l_shape_domain",
+    "locate_cells",
+    "match_vertices",
+    "nested_cells",
     "nonconvex_mesh",
     "part_code",
     "perturb_vertices",

@@ -136,7 +136,7 @@ def differences(results: dict[str, Result]) -> list[dict[str, Any]]:
         both, and ``l2_rel``, the relative L2(Gamma_C) difference (exact for piecewise
         linear w) against the finer of the two (``a``).
     """
-    from ..post.errors import contact_l2_norm
+    from ..post.norms import contact_l2_norm
 
     rows = []
     for a, b in itertools.combinations(results, 2):

@@ -1,6 +1,6 @@
 """Example 5.4 of the paper: the same problem on squares and on general polygons.
 
-Data (paper Section 5; design note, section 6): as Example 5.2, data set 1:
+Data (paper Section 5): as Example 5.2, data set 1:
 Omega = (0, 2) x (0, 1), Gamma_D = left side, Gamma_N = top and right sides,
 Gamma_C = bottom side; lam = eta = 4, T = 1, u^0 = 0, p(r) = 0.4 r_+,
 f1 = (0, -0.06), f2 = 0, g = 0.1, v* = (1, 0), mu = 0.2, kappa = 2, k = 1/64.
@@ -21,7 +21,7 @@ of Fig. 7), and quantifies the agreement:
 * displacement: at the vertices both meshes share (the domain corners and any
   boundary point present in both, matched by coordinates) and at probe points,
   where ``Pi u`` of the containing cell is evaluated on each mesh
-  (:func:`evaluate_projection`);
+  (:meth:`vemwear.vem.Projection.evaluate`);
 * the shape regularity (assumption A1) of the Voronoi mesh;
 * mesh convergence: :func:`voronoi_refinement_study` repeats the comparison for
   Voronoi meshes of 128, 512 and 2048 cells against the 2048 squares; the
@@ -46,10 +46,10 @@ from scipy.spatial import cKDTree
 
 from ..cli.output import write_outputs
 from ..mesh import Mesh, quality_report, rectangle_voronoi, tag_rectangle
-from ..post.errors import contact_l2_norm, locate_cells
+from ..post.norms import contact_l2_norm
 from ..post.results import jsonable
 from ..simulate import Problem, Result, SolverOptions, simulate
-from ..vem import projection_coefficients
+from ..vem import Projection
 from . import ExampleRun, ex52
 
 if TYPE_CHECKING:
@@ -71,8 +71,6 @@ __all__ = [
     "RefinementStudy",
     "compare_runs",
     "displacement_difference",
-    "evaluate_projection",
-    "locate_cells",
     "polygon_mesh",
     "probe_points",
     "problem",
@@ -188,7 +186,7 @@ def profile_difference(
         ``max_abs`` (max |a - I b|), ``rel_max`` (max |a - I b| / max |a|), ``rel_l2``
         (``||a - I b|| / ||a||`` in L2(Gamma_C), both piecewise linear on the
         reference's contact edges, integrated exactly:
-        :func:`vemwear.post.errors.contact_l2_norm`), ``max_reference``, ``max_other``.
+        :func:`vemwear.post.norms.contact_l2_norm`), ``max_reference``, ``max_other``.
     """
     la, lb = reference.level(time), other.level(time)
     a = np.asarray(getattr(reference, quantity))[la]
@@ -209,39 +207,7 @@ def profile_difference(
     }
 
 
-# ---------------------------------------------------------------------------- Pi u at points
-def evaluate_projection(
-    mesh: Mesh, u: ArrayLike, points: ArrayLike, cells: ArrayLike | None = None
-) -> NDArray[np.float64]:
-    """``Pi u`` of the containing cell at every point (paper 3.8-3.10).
-
-    Parameters
-    ----------
-    mesh : Mesh
-    u : (n_points, 2) array_like
-        Vertex values (the VEM degrees of freedom).
-    points : (n, 2) array_like
-    cells : (n,) array_like of int, optional
-        The containing cells, if known (:func:`locate_cells`).
-
-    Returns
-    -------
-    (n, 2) float array
-
-    Raises
-    ------
-    ValueError
-        If a point lies outside the mesh.
-    """
-    pts = np.asarray(points, dtype=float).reshape(-1, 2)
-    c = locate_cells(mesh, pts) if cells is None else np.asarray(cells, dtype=np.int64)
-    if np.any(c < 0):
-        bad = pts[c < 0][:3].tolist()
-        raise ValueError(f"points {bad} lie outside the mesh")
-    xbar, vbar, G = projection_coefficients(mesh, np.asarray(u, dtype=float))
-    return vbar[c] + np.einsum("nij,nj->ni", G[c], pts - xbar[c])
-
-
+# ---------------------------------------------------------------------------- probes
 def probe_points(
     size: tuple[float, float] = ex52.SIZE, n: tuple[int, int] = (16, 8)
 ) -> NDArray[np.float64]:
@@ -317,8 +283,8 @@ def displacement_difference(
         for i, j in zip(ia, ib, strict=True)
     ]
     pts = probe_points() if probes is None else np.asarray(probes, dtype=float).reshape(-1, 2)
-    pa = evaluate_projection(reference.problem.mesh, ua, pts)
-    pb = evaluate_projection(other.problem.mesh, ub, pts)
+    pa = Projection(reference.problem.mesh).evaluate(ua, pts)
+    pb = Projection(other.problem.mesh).evaluate(ub, pts)
     d = pa - pb
     comp = {}
     for c, name in enumerate(("u1", "u2")):

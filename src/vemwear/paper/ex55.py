@@ -7,16 +7,20 @@ h = k = 1/4, 1/8, ..., 1/64, against the reference solution h = k = 1/256
 use Example 5.3's (= Example 5.2's data set 1): mu = 0.2, kappa = 2, v* = (1, 0),
 the data set of every other single-data-set example of the paper (5.3, 5.4).
 
-Errors (:mod:`vemwear.post.errors`, design note section 5), relative, at the common
-time levels (the levels of the coarse grid; all of them are reference levels):
+Errors (:mod:`vemwear.post.compare`; docs/paper.md), relative, at the common time
+levels (the levels of the coarse grid; all of them are reference levels):
 
-- displacement: ``||Pi(u_h - I_h u_ref)||_{H1} / ||Pi I_h u_ref||_{H1}`` (Table 1), and
-  the H1-seminorm variant;
-- wear: ``||w_h - I_h w_ref||_{L2(Gamma_C)} / ||I_h w_ref||_{L2(Gamma_C)}`` (Table 2),
-  w piecewise linear (exact integral), and the nodal-quadrature variant;
+- displacement (Table 1), column ``u_H1``: each solution projected by its own ``Pi``
+  (3.8)-(3.10) on its own mesh, the difference of the two piecewise linear fields
+  integrated over the cells of the reference mesh, full H1 norm:
+  ``||Pi_h u_h - Pi_ref u_ref||_{H1} / ||Pi_ref u_ref||_{H1}``;
+- wear (Table 2), column ``w_L2``: ``||w_h - w_ref||_{L2(Gamma_C)} /
+  ||w_ref||_{L2(Gamma_C)}``, both piecewise linear along Gamma_C, integrated exactly;
 
-each at t = T and as the maximum over the common levels. Orders are log2 of the
-ratios of successive errors.
+at t = T (the tables) and as the maximum over the common levels; secondary variants in
+``errors.csv`` (:mod:`vemwear.paper.ex55_tables`). Orders are log2 of the ratios of
+successive errors. :mod:`vemwear.paper.ex55_study` splits the wear error into its
+space and time parts.
 
 The reference is computed with ``simulate(..., store=[common times])`` so that only
 the needed displacements are recovered, and cached on disk (``.npz`` plus a ``.json``
@@ -27,9 +31,7 @@ change and it holds the displacement at every needed time.
 
 from __future__ import annotations
 
-import csv
 import hashlib
-import io
 import json
 import os
 import tempfile
@@ -42,9 +44,18 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
-from ..post.errors import Comparison, ErrorHistory, Solution, convergence_orders
+from ..post.compare import Comparison, ErrorHistory, Solution
 from ..simulate import Problem, Result, SolverOptions, simulate
 from . import ExampleRun, ex52
+from .ex55_tables import (
+    PAPER_TABLE1,
+    PAPER_TABLE2,
+    error_tables,
+    paper_ratios,
+    plot_tables,
+    tables_csv,
+    tables_markdown,
+)
 
 __all__ = [
     "CACHE_FORMAT",
@@ -62,6 +73,7 @@ __all__ = [
     "common_times",
     "default_cache_dir",
     "error_tables",
+    "paper_ratios",
     "problem",
     "problems",
     "reference_solution",
@@ -83,36 +95,6 @@ LEVELS: tuple[int, ...] = (4, 8, 16, 32, 64)  # 1/h = 1/k
 REFERENCE: int = 256
 T = ex52.T
 CACHE_FORMAT = "vemwear-ex55-reference/1"
-
-#: The paper's Table 1 (relative H1 displacement errors) and Table 2 (relative L2 wear
-#: errors), by 1/h, and their orders.
-PAPER_TABLE1: dict[str, Any] = {
-    "errors": {4: 7.0581e-2, 8: 3.9059e-2, 16: 2.1698e-2, 32: 1.2084e-2, 64: 6.5023e-3},
-    "orders": {8: 0.85365, 16: 0.84807, 32: 0.84448, 64: 0.89407},
-}
-PAPER_TABLE2: dict[str, Any] = {
-    "errors": {4: 1.1153e-1, 8: 5.4917e-2, 16: 2.5228e-2, 32: 1.1795e-2, 64: 5.4869e-3},
-    "orders": {8: 1.0221, 16: 1.1223, 32: 1.0968, 64: 1.1041},
-}
-
-#: Columns of the error tables: (key, where, quantity, variant, when); ``where`` is
-#: ``coarse`` (design note section 5) or ``fine`` (the coarse solution prolongated to
-#: the reference mesh, :meth:`vemwear.post.errors.Comparison.errors`).
-COLUMNS: tuple[tuple[str, str, str, str, str], ...] = (
-    ("u_H1_T", "coarse", "displacement", "H1", "T"),
-    ("u_H1_max", "coarse", "displacement", "H1", "max"),
-    ("u_H1semi_T", "coarse", "displacement", "H1semi", "T"),
-    ("u_H1semi_max", "coarse", "displacement", "H1semi", "max"),
-    ("u_fine_H1_T", "fine", "displacement", "H1", "T"),
-    ("u_fine_H1semi_T", "fine", "displacement", "H1semi", "T"),
-    ("u_fine_H1semi_max", "fine", "displacement", "H1semi", "max"),
-    ("w_L2_T", "coarse", "wear", "exact", "T"),
-    ("w_L2_max", "coarse", "wear", "exact", "max"),
-    ("w_nodal_T", "coarse", "wear", "nodal", "T"),
-    ("w_nodal_max", "coarse", "wear", "nodal", "max"),
-    ("w_fine_L2_T", "fine", "wear", "exact", "T"),
-    ("w_fine_L2_max", "fine", "wear", "exact", "max"),
-)
 
 
 def check_sizes(levels: Sequence[int], reference: int) -> tuple[tuple[int, ...], int]:
@@ -146,9 +128,10 @@ def check_sizes(levels: Sequence[int], reference: int) -> tuple[tuple[int, ...],
     return tuple(sorted(lv)), ref
 
 
-def problem(n: int) -> Problem:
-    """The problem with h = k = 1/n: (2n) x n squares, n uniform steps on [0, 1]."""
-    return ex52.problem(MU, KAPPA, divisions=(2 * n, n), steps=n)
+def problem(n: int, steps: int | None = None) -> Problem:
+    """The problem with h = 1/n ((2n) x n squares) and ``steps`` uniform steps on [0, 1]
+    (default n: k = h, the paper's choice)."""
+    return ex52.problem(MU, KAPPA, divisions=(2 * n, n), steps=n if steps is None else steps)
 
 
 def problems(*, levels: Sequence[int] = LEVELS) -> dict[str, Problem]:
@@ -310,188 +293,22 @@ def reference_solution(
     return sol, extra
 
 
-# ----------------------------------------------------------------------------- tables
-def error_tables(histories: dict[str, dict[int, ErrorHistory]]) -> dict[str, Any]:
-    """Errors and orders of every column of :data:`COLUMNS`, by increasing ``1/h``.
-
-    Parameters
-    ----------
-    histories : dict
-        ``{"coarse": {n: ErrorHistory}, "fine": {n: ErrorHistory}}``.
-
-    Returns
-    -------
-    dict
-        ``{column: {"errors": [...], "orders": [nan, ...]}}`` plus ``"n": [4, 8, ...]``.
-    """
-    ns = sorted(histories["coarse"])
-    out: dict[str, Any] = {"n": ns}
-    for key, where, q, variant, when in COLUMNS:
-        hs = histories[where]
-        e = [hs[n].at_T(q, variant) if when == "T" else hs[n].max(q, variant) for n in ns]
-        o = [float("nan"), *convergence_orders(e).tolist()]
-        out[key] = {"errors": e, "orders": o}
-    return out
-
-
-def _e(v: float | None) -> str:
-    return "-" if v is None or not np.isfinite(v) else f"{v:.4e}"
-
-
-def _o(v: float | None) -> str:
-    return "-" if v is None or not np.isfinite(v) else f"{v:.4f}"
-
-
-def _pow2(n: int) -> str:
-    k = round(float(np.log2(n)))
-    return f"2^-{k}" if 2**k == n else f"1/{n}"
-
-
-#: Our rows of Tables 1 and 2 in :func:`tables_markdown`: (label, column, part).
-TABLE1_ROWS: tuple[tuple[str, str, str], ...] = (
-    ("ours, t = T: error", "u_H1_T", "errors"),
-    ("ours, t = T: order", "u_H1_T", "orders"),
-    ("ours, max over t: error", "u_H1_max", "errors"),
-    ("ours, max over t: order", "u_H1_max", "orders"),
-    ("ours, H1 seminorm, t = T", "u_H1semi_T", "errors"),
-    ("ours, H1 seminorm, order", "u_H1semi_T", "orders"),
-    ("ours, H1 seminorm, max over t", "u_H1semi_max", "errors"),
-    ("ours on the fine mesh, H1 seminorm, t = T", "u_fine_H1semi_T", "errors"),
-    ("ours on the fine mesh, H1 seminorm, order", "u_fine_H1semi_T", "orders"),
-    ("ours on the fine mesh, H1 seminorm, max over t", "u_fine_H1semi_max", "errors"),
-    ("ours on the fine mesh, H1, t = T", "u_fine_H1_T", "errors"),
-)
-TABLE2_ROWS: tuple[tuple[str, str, str], ...] = (
-    ("ours, t = T: error", "w_L2_T", "errors"),
-    ("ours, t = T: order", "w_L2_T", "orders"),
-    ("ours, max over t: error", "w_L2_max", "errors"),
-    ("ours, max over t: order", "w_L2_max", "orders"),
-    ("ours, nodal quadrature, t = T", "w_nodal_T", "errors"),
-    ("ours, nodal quadrature, order", "w_nodal_T", "orders"),
-    ("ours on the fine mesh, t = T", "w_fine_L2_T", "errors"),
-    ("ours on the fine mesh, order", "w_fine_L2_T", "orders"),
-)
-
-
-def tables_markdown(tables: dict[str, Any], reference: int) -> str:
-    """Tables 1 and 2 (ours beside the paper's) and the variants, as Markdown."""
-    ns = tables["n"]
-    fmt = {"errors": _e, "orders": _o}
-
-    def row(label: str, vals: Sequence[float | None], part: str) -> str:
-        return f"| {label} | " + " | ".join(fmt[part](v) for v in vals) + " |"
-
-    def table(title: str, paper: dict[str, Any], rows: Sequence[tuple[str, str, str]]) -> list[str]:
-        return [
-            f"### {title} (reference h = k = 1/{reference})",
-            "",
-            "| h = k | " + " | ".join(_pow2(n) for n in ns) + " |",
-            "|---|" + "---|" * len(ns),
-            *(row(f"paper: {p[:-1]}", [paper[p].get(n) for n in ns], p) for p in fmt),
-            *(row(label, tables[key][part], part) for label, key, part in rows),
-            "",
-        ]
-
-    lines = [
-        *table("Table 1: relative H1 error of the displacement", PAPER_TABLE1, TABLE1_ROWS),
-        *table("Table 2: relative L2(Gamma_C) error of the wear", PAPER_TABLE2, TABLE2_ROWS),
-    ]
-    return "\n".join(lines)
-
-
-def tables_csv(tables: dict[str, Any]) -> str:
-    """Every column of :data:`COLUMNS` (error and order) and the paper's, one row per h."""
-    buf = io.StringIO()
-    wr = csv.writer(buf, lineterminator="\n")
-    keys = [c[0] for c in COLUMNS]
-    wr.writerow(
-        [
-            "inv_h",
-            "h",
-            "k",
-            *[f"{k}{s}" for k in keys for s in ("", "_order")],
-            "paper_table1",
-            "paper_table1_order",
-            "paper_table2",
-            "paper_table2_order",
-        ]
-    )
-    for i, n in enumerate(tables["n"]):
-        vals: list[str] = []
-        for k in keys:
-            e, o = tables[k]["errors"][i], tables[k]["orders"][i]
-            vals += [f"{e:.6e}", "" if not np.isfinite(o) else f"{o:.6f}"]
-        p1, p1o = PAPER_TABLE1["errors"].get(n), PAPER_TABLE1["orders"].get(n)
-        p2, p2o = PAPER_TABLE2["errors"].get(n), PAPER_TABLE2["orders"].get(n)
-        wr.writerow(
-            [
-                n,
-                f"{1 / n:.10g}",
-                f"{1 / n:.10g}",
-                *vals,
-                "" if p1 is None else p1,
-                "" if p1o is None else p1o,
-                "" if p2 is None else p2,
-                "" if p2o is None else p2o,
-            ]
-        )
-    return buf.getvalue()
-
-
-def _plot(tables: dict[str, Any], reference: int, path: Path) -> None:
-    from matplotlib.figure import Figure
-    from matplotlib.ticker import NullLocator
-
-    ns = np.asarray(tables["n"], dtype=float)
-    h = 1.0 / ns
-    fig = Figure(figsize=(10.0, 4.2), layout="constrained")
-    axes = fig.subplots(1, 2)
-    spec = [
-        (
-            "Displacement, relative H1 error (Table 1)",
-            PAPER_TABLE1,
-            [
-                ("u_H1_T", "ours, t = T"),
-                ("u_H1_max", "ours, max over t"),
-                ("u_fine_H1semi_T", "ours on the fine mesh, H1 seminorm, t = T"),
-            ],
-        ),
-        (
-            "Wear, relative L2($\\Gamma_C$) error (Table 2)",
-            PAPER_TABLE2,
-            [
-                ("w_L2_T", "ours, t = T"),
-                ("w_L2_max", "ours, max over t"),
-                ("w_fine_L2_T", "ours on the fine mesh, t = T"),
-            ],
-        ),
-    ]
-    for ax, (title, paper, cols) in zip(axes, spec, strict=True):
-        for (key, label), mk in zip(cols, ("o", "s", "^"), strict=True):
-            ax.loglog(h, tables[key]["errors"], marker=mk, label=label)
-        pn = [n for n in tables["n"] if n in paper["errors"]]
-        if pn:
-            ax.loglog(
-                [1.0 / n for n in pn],
-                [paper["errors"][n] for n in pn],
-                "k--",
-                marker="x",
-                label="paper",
+# ----------------------------------------------------------------------------- driver
+def _ratio_lines(tables: dict[str, Any]) -> list[str]:
+    """One line per table: the range of ours / paper."""
+    out = []
+    for key, name in (("u_H1", "Table 1"), ("w_L2", "Table 2")):
+        r = [x for x in paper_ratios(tables)[key] if np.isfinite(x)]
+        if r:
+            out.append(
+                f"- {name}: ours / paper = "
+                + ", ".join(f"{x:.3f}" for x in r)
+                + f" (range {min(r):.3f}-{max(r):.3f})."
             )
-        e0 = tables[cols[0][0]]["errors"][0]
-        ax.loglog(h, e0 * h / h[0], ":", color="gray", label="slope 1")
-        ax.set_xticks(h, [f"1/{int(n)}" for n in ns])
-        ax.xaxis.set_minor_locator(NullLocator())
-        ax.set_xlabel("h = k")
-        ax.set_ylabel("relative error")
-        ax.set_title(title, fontsize="medium")
-        ax.grid(True, which="both", lw=0.3, alpha=0.5)
-        ax.legend(frameon=False, fontsize="small")
-    fig.suptitle(f"{TITLE}: errors against the reference h = k = 1/{reference}")
-    fig.savefig(path, dpi=150)
+    return [*out, ""] if out else []
 
 
-def _report(tables: dict[str, Any], info: dict[str, Any]) -> str:
+def _report(tables: dict[str, Any], info: dict[str, Any], study_lines: Sequence[str] = ()) -> str:
     ref = info["reference"]
     r = info["reference_info"]
     how = "read from the cache" if r["cached"] else "computed in this run"
@@ -509,25 +326,29 @@ def _report(tables: dict[str, Any], info: dict[str, Any]) -> str:
         + ". "
         f"Solver `{info['solver']}`; wall time of this example {info['elapsed']:.1f} s.",
         "",
-        "Errors are relative, on the coarse mesh, against the nodal interpolant of the "
-        "reference at the coarse vertices (nested meshes), at t = T and as the maximum over "
-        "the coarse time levels (all of them are reference levels). Displacement: "
-        "||Pi(u_h - I_h u_ref)||_H1 / ||Pi I_h u_ref||_H1 with Pi the coarse VEM projection "
-        "(full H1 norm; the seminorm variant below). Wear: ||w_h - I_h w_ref||_L2(Gamma_C) / "
-        "||I_h w_ref||_L2(Gamma_C), w piecewise linear along Gamma_C and integrated exactly "
-        "(the nodal-quadrature variant below).",
-        "",
-        '"On the fine mesh": the coarse solution is prolongated to the reference mesh '
-        "(exact on coarse edges, mean value interpolation of the vertex values inside coarse "
-        "cells, i.e. nearly bilinear on squares) and compared there with Pi of the reference "
-        "mesh; this error includes the interpolation error u_ref - I_h u_ref, which the "
-        "coarse-mesh error does not see. The paper's Table 1 is close to this variant with "
-        "the H1 seminorm.",
+        "Errors are relative, at t = T (the maximum over the coarse time levels as a "
+        "secondary row). Displacement (Table 1, column `u_H1`): each solution is projected by "
+        "its own Pi (3.8)-(3.10) on its own mesh, a linear field per cell, and the difference "
+        "of the two piecewise linear fields is integrated exactly over the cells of the "
+        "reference mesh (every reference cell lies in one coarse cell): "
+        "||Pi_h u_h - Pi_ref u_ref||_H1 / ||Pi_ref u_ref||_H1, full H1 norm. Wear (Table 2, "
+        "column `w_L2`): ||w_h - w_ref||_L2(Gamma_C) / ||w_ref||_L2(Gamma_C), both piecewise "
+        "linear along Gamma_C, integrated exactly over the reference's contact edges. "
+        "Secondary variants (in `errors.csv`): the seminorm; `I_h u_ref`, the reference at "
+        "the coarse vertices, compared on the coarse mesh (blind to u_ref - I_h u_ref); the "
+        "coarse vertex values carried to the reference mesh by mean value coordinates.",
         "",
         tables_markdown(tables, ref),
+        *_ratio_lines(tables),
+        *study_lines,
         "## Files",
         "",
         "- `table1.md`, `table2.md`, `errors.csv`: the tables (every variant in the CSV).",
+        *(
+            ["- `table2_study.md`: the space / time split of the wear error."]
+            if study_lines
+            else []
+        ),
         "- `convergence.png`: log-log plot of the errors, with the paper's.",
         "- `h4/`, `h8/`, ...: `result.npz` and `summary.json` of every coarse run.",
         "",
@@ -545,6 +366,7 @@ def run(
     progress: bool = False,
     figures: bool = True,
     vtk: bool = False,
+    study: bool = False,
     log: Callable[[str], None] | None = None,
 ) -> ExampleRun:
     """Compute Tables 1 and 2 and write them into the existing directory ``outdir``.
@@ -572,13 +394,18 @@ def run(
         Write ``convergence.png`` (the coarse runs get no figures).
     vtk : bool
         Write the VTK series of the coarse runs (off by default).
+    study : bool
+        Also split the wear error into its space and time parts
+        (:func:`vemwear.paper.ex55_study.wear_error_study`, reusing the reference) and
+        write ``table2_study.md``.
 
     Returns
     -------
     ExampleRun
         ``results``: the coarse runs by name (``h4``, ...); ``details``: ``tables``
-        (:func:`error_tables`), ``reference`` (1/h), ``reference_info`` (cached?, its
-        run time) and ``paper`` (Tables 1 and 2).
+        (:func:`~vemwear.paper.ex55_tables.error_tables`), ``ratios`` (ours / paper),
+        ``reference`` (1/h), ``reference_info`` (cached?, its run time), ``paper``
+        (Tables 1 and 2) and ``study`` (or None).
     """
     t0 = time.perf_counter()
     out = Path(outdir)
@@ -595,7 +422,7 @@ def run(
         ref, times, solver=opts, cache_dir=cache_dir, progress=progress, log=log
     )
     results: dict[str, Result] = {}
-    histories: dict[str, dict[int, ErrorHistory]] = {"coarse": {}, "fine": {}}
+    histories: dict[int, ErrorHistory] = {}
     comparison = Comparison(ref_sol)
     files: list[str] = []
     from ..cli.output import write_outputs
@@ -606,8 +433,7 @@ def run(
             log(f"{TITLE}, {name}: h = k = 1/{n}")
         res = simulate(problem(n), opts, progress=progress, store="all")
         results[name] = res
-        for where in ("coarse", "fine"):
-            histories[where][n] = comparison.errors(res, on=where)
+        histories[n] = comparison.errors(res)
         sub = out / name
         sub.mkdir(parents=True, exist_ok=True)
         extra = {"example": NAME, "inv_h": n, "data": {"mu": MU, "kappa": KAPPA}}
@@ -621,12 +447,23 @@ def run(
     (out / "errors.csv").write_text(tables_csv(tables), encoding="utf-8")
     files += ["table1.md", "table2.md", "errors.csv"]
     if figures:
-        _plot(tables, ref, out / "convergence.png")
+        plot_tables(tables, ref, out / "convergence.png", TITLE)
         files.append("convergence.png")
+    study_result: dict[str, Any] | None = None
+    study_lines: list[str] = []
+    if study:
+        from .ex55_study import study_markdown, wear_error_study
+
+        study_result = wear_error_study(
+            levels=lv, reference=ref, solver=opts, comparison=comparison, coarse=results, log=log
+        )
+        study_lines = study_markdown(study_result).splitlines()
+        (out / "table2_study.md").write_text("\n".join(study_lines) + "\n", encoding="utf-8")
+        files.append("table2_study.md")
     elapsed = time.perf_counter() - t0
     info = {"reference": ref, "reference_info": ref_info, "solver": opts.method, "elapsed": elapsed}
     report = out / "example_5_5.md"
-    report.write_text(_report(tables, info), encoding="utf-8")
+    report.write_text(_report(tables, info, study_lines), encoding="utf-8")
     files.append(report.name)
     details = {
         "tables": tables,
@@ -634,6 +471,8 @@ def run(
         "reference_info": ref_info,
         "levels": list(lv),
         "paper": {"table1": PAPER_TABLE1, "table2": PAPER_TABLE2},
+        "ratios": paper_ratios(tables),
+        "study": study_result,
         "summary": md.splitlines(),
     }
     return ExampleRun(

@@ -23,7 +23,7 @@ Derivatives, written out by hand (checked symbolically in the tests)::
     (div sigma)_1 = -(3 eta + lam) pi^2 sin(pi x) sin(pi y) + 2 (lam + eta) x
     (div sigma)_2 = (lam + eta) pi^2 cos(pi x) cos(pi y) + 2 eta y
 
-Errors (:func:`vemwear.post.errors.exact_errors`), on a degree-5 rule on the fan
+Errors (:func:`vemwear.post.norms.exact_errors`), on a degree-5 rule on the fan
 triangulation of every cell: ``H1``: ``||grad(Pi u_h) - grad u||_{L2}`` (expected order
 1); ``L2``: ``||Pi u_h - u||_{L2}`` (expected order 2); ``nodal``: the cell-weighted
 nodal L2 error (order 2). Orders use the mean cell size ``sqrt(|Omega| / n_cells)``,
@@ -44,7 +44,7 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from ..mesh import Mesh, rectangle_squares, rectangle_triangles, tag_rectangle
-from ..post.errors import exact_errors
+from ..post.norms import exact_errors
 from ..vem import Material, body_force_vector, edge_load_vector, stiffness
 
 __all__ = [

@@ -5,8 +5,29 @@
 - :mod:`~vemwear.post.plots`: the paper's figures (contact profiles, displacement maps,
   comparisons) plus the deformed mesh and time histories, as matplotlib figures.
 - :mod:`~vemwear.post.vtk`: a ``.pvd`` time series of ``.vtu`` files for ParaView.
+- :mod:`~vemwear.post.norms`: norms of projected displacements and of the wear, errors
+  against exact solutions.
+- :mod:`~vemwear.post.compare`: errors against a reference solution on a nested mesh
+  (Example 5.5), convergence orders; :mod:`~vemwear.post.prolong`: coarse functions at
+  fine points.
 """
 
+from .compare import (
+    Comparison,
+    ErrorHistory,
+    Solution,
+    common_levels,
+    convergence_orders,
+    solution_errors,
+)
+from .norms import (
+    ProjectedNorms,
+    contact_l2_norm,
+    displacement_error,
+    exact_errors,
+    projected_norm,
+    wear_error,
+)
 from .plots import (
     QUANTITIES,
     compare_profiles,
@@ -27,8 +48,17 @@ from .vtk import cell_strain_stress, write_vtk_series
 
 __all__ = [
     "QUANTITIES",
+    "Comparison",
+    "ErrorHistory",
+    "ProjectedNorms",
+    "Solution",
     "cell_strain_stress",
+    "common_levels",
     "compare_profiles",
+    "contact_l2_norm",
+    "convergence_orders",
+    "displacement_error",
+    "exact_errors",
     "load_result",
     "load_summary",
     "mesh_from_arrays",
@@ -36,8 +66,11 @@ __all__ = [
     "plot_deformed",
     "plot_displacement",
     "plot_time_history",
+    "projected_norm",
     "result_arrays",
     "save_result",
+    "solution_errors",
     "summarize",
+    "wear_error",
     "write_vtk_series",
 ]

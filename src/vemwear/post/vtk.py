@@ -34,8 +34,8 @@ from numpy.typing import NDArray
 
 from ..mesh.io import to_meshio
 from ..mesh.polymesh import Mesh
-from ..vem.assembly import projection_coefficients
 from ..vem.local import Material
+from ..vem.projection import Projection
 
 if TYPE_CHECKING:
     from ..simulate.loop import Result
@@ -44,7 +44,10 @@ __all__ = ["cell_strain_stress", "write_vtk_series"]
 
 
 def cell_strain_stress(
-    mesh: Mesh, u: NDArray[np.float64], material: Material
+    mesh: Mesh,
+    u: NDArray[np.float64],
+    material: Material,
+    projection: Projection | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Projected strain, plane-strain stress and von Mises stress per cell.
 
@@ -55,6 +58,8 @@ def cell_strain_stress(
         Vertex displacements.
     material : Material
         Lamé coefficients ``lam``, ``eta``.
+    projection : Projection, optional
+        ``Pi`` of ``mesh`` (:class:`~vemwear.vem.projection.Projection`), if already built.
 
     Returns
     -------
@@ -65,8 +70,7 @@ def cell_strain_stress(
     von_mises : (n_cells,) array
         ``sqrt(((s_xx - s_yy)^2 + (s_yy - s_zz)^2 + (s_zz - s_xx)^2) / 2 + 3 s_xy^2)``.
     """
-    _xbar, _vbar, G = projection_coefficients(mesh, u)
-    E = 0.5 * (G + G.transpose(0, 2, 1))
+    E = (Projection(mesh) if projection is None else projection).strain(u)
     tr = E[:, 0, 0] + E[:, 1, 1]
     lam, eta = float(material.lam), float(material.eta)
     strain = np.zeros((mesh.n_cells, 3, 3))
@@ -151,6 +155,7 @@ def write_vtk_series(
     # by default every level whose displacement was stored
     chosen = [int(v) for v in result.u_levels] if levels is None else _levels(levels, L)
     width = max(4, len(str(L - 1)))
+    projection = Projection(mesh)
     base = to_meshio(mesh, with_boundary=False)
     order = _block_order(mesh)
     cell_id = [ids.astype(np.int64) for ids in order]
@@ -176,7 +181,7 @@ def write_vtk_series(
             full[nodes] = np.asarray(arr[lv])
             point_data[key] = full
         point_data["contact"] = contact
-        strain, stress, vm = cell_strain_stress(mesh, u, material)
+        strain, stress, vm = cell_strain_stress(mesh, u, material, projection)
         cell_data = {
             "strain": [strain[ids].reshape(-1, 9) for ids in order],
             "stress": [stress[ids].reshape(-1, 9) for ids in order],

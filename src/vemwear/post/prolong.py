@@ -1,0 +1,189 @@
+"""Prolongation of coarse functions to the points of a nested fine mesh.
+
+:func:`prolongation` carries a virtual element function (its vertex values) of a coarse
+mesh to fine points, :func:`contact_prolongation` the wear along Gamma_C. Both are
+sparse matrices, built once per pair of meshes and applied to every time level
+(:class:`vemwear.post.compare.Comparison`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
+
+from ..mesh.locate import (
+    NonNestedMeshError,
+    extent_tol,
+    inside_polygons,
+    padded_edges,
+    point_segment_distance,
+    vertex_averages,
+)
+from ..mesh.polymesh import Mesh
+
+__all__ = ["contact_prolongation", "prolongation"]
+
+
+def prolongation(
+    coarse: Mesh,
+    fine_points: ArrayLike,
+    *,
+    tol: float | None = None,
+    candidates: int = 12,
+) -> sp.csr_matrix:
+    """The linear map from coarse vertex values to values at fine points (nested meshes).
+
+    A VEM function ``v`` of the coarse mesh is known on the cell boundaries (linear on
+    every edge) but not inside the cells. The prolongation takes, at a fine point,
+    ``v`` itself if the point is a coarse vertex or lies on a coarse edge (linear
+    interpolation along the edge, exact), and the mean value interpolant (Floater's
+    generalized barycentric coordinates: linear on the edges, exact for linear fields,
+    defined on any simple polygon) of the vertex values of the coarse cell containing
+    it otherwise. The result is a continuous function of the fine mesh.
+
+    Parameters
+    ----------
+    coarse : Mesh
+    fine_points : (q, 2) array_like
+        Points inside the coarse mesh (typically the vertices of a nested fine mesh).
+    tol : float, optional
+        Distance under which a point is on an edge; default ``1e-9`` times the diameter
+        of the bounding box of the coarse mesh.
+    candidates : int
+        Number of nearest cells (by vertex average) tried for every point.
+
+    Returns
+    -------
+    (2 q, 2 n_coarse) sparse matrix
+        Acting on the interleaved vertex values ``(v_x, v_y)``.
+
+    Raises
+    ------
+    NonNestedMeshError
+        If a point lies in no coarse cell.
+    """
+    X = np.asarray(fine_points, dtype=float)
+    q = len(X)
+    C = coarse.points
+    tol = extent_tol(C, tol)
+    rows: list[NDArray[np.int64]] = []
+    cols: list[NDArray[np.int64]] = []
+    vals: list[NDArray[np.float64]] = []
+
+    def add(pts: NDArray[np.int64], verts: NDArray[np.int64], w: NDArray[np.float64]) -> None:
+        for c in range(2):
+            rows.append(2 * pts + c)
+            cols.append(2 * verts + c)
+            vals.append(w)
+
+    # 1. coarse vertices
+    dist, near = cKDTree(C).query(X, k=1)
+    hit = np.flatnonzero(dist <= tol)
+    add(hit, near[hit], np.ones(len(hit)))
+    # 2. points on a coarse edge or inside a coarse cell
+    V, Vn = padded_edges(coarse)  # (nc, nmax), padded with degenerate edges
+    nmax = V.shape[1]
+    k = min(int(candidates), coarse.n_cells)
+    todo = np.flatnonzero(dist > tol)
+    _d, cand = cKDTree(vertex_averages(coarse)).query(X[todo], k=k)
+    cand = np.asarray(cand).reshape(len(todo), k)
+    for r in range(k):
+        if todo.size == 0:
+            break
+        cells = cand[:, r]
+        P = X[todo][:, None, :]
+        A, B = C[V[cells]], C[Vn[cells]]  # (t, nmax, 2): edges A -> B, closing edge last
+        de, s = point_segment_distance(P, A, B)
+        j = np.argmin(de, axis=1)
+        t_all = np.arange(len(todo))
+        on_edge = de[t_all, j] <= tol
+        if np.any(on_edge):
+            t_ = np.flatnonzero(on_edge)
+            sj = s[t_, j[t_]]
+            add(todo[t_], V[cells[t_], j[t_]], 1.0 - sj)
+            add(todo[t_], Vn[cells[t_], j[t_]], sj)
+        inside = inside_polygons(P, A, B) & ~on_edge
+        if np.any(inside):
+            # mean value coordinates: w_i = (tan(a_{i-1}/2) + tan(a_i/2)) / r_i, with a_i the
+            # angle at x of the edge (A_i, B_i); tan(a/2) = cross / (r_A r_B + dot)
+            t_ = np.flatnonzero(inside)
+            dA, dB = A[t_] - P[t_], B[t_] - P[t_]
+            rA, rB = np.linalg.norm(dA, axis=-1), np.linalg.norm(dB, axis=-1)
+            cr = dA[..., 0] * dB[..., 1] - dA[..., 1] * dB[..., 0]
+            dot = np.sum(dA * dB, axis=-1)
+            tan = cr / (rA * rB + dot)  # 0 on degenerate (padded) edges
+            w_edge = tan / rA + tan / rB  # contributions to the edge's two ends
+            pts = np.repeat(todo[t_], nmax)
+            w = np.concatenate([(tan / rA).ravel(), (tan / rB).ravel()])
+            tot = np.sum(w_edge, axis=1)
+            w = w / np.concatenate([np.repeat(tot, nmax), np.repeat(tot, nmax)])
+            add(
+                np.concatenate([pts, pts]),
+                np.concatenate([V[cells[t_]].ravel(), Vn[cells[t_]].ravel()]),
+                w,
+            )
+        keep = ~(on_edge | inside)
+        todo, cand = todo[keep], cand[keep]
+    if todo.size:
+        b = int(todo[0])
+        raise NonNestedMeshError(
+            f"{todo.size} fine points lie in none of the {k} nearest coarse cells (first: "
+            f"{X[b].tolist()}); are the meshes nested and covering the same domain?"
+        )
+    M = sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(2 * q, 2 * coarse.n_points),
+    )
+    M.sum_duplicates()
+    return M
+
+
+def contact_prolongation(
+    coarse: Mesh, coarse_nodes: ArrayLike, fine_points: ArrayLike, *, tol: float | None = None
+) -> sp.csr_matrix:
+    """The linear map from wear values at the coarse contact nodes to values at fine points
+    on Gamma_C (piecewise linear interpolation along the coarse contact edges; the
+    clamped end of Gamma_C carries 0).
+
+    Returns
+    -------
+    (q, m_coarse) sparse matrix
+
+    Raises
+    ------
+    NonNestedMeshError
+        If a point is on no coarse contact edge.
+    """
+    X = np.asarray(fine_points, dtype=float)
+    nodes = np.asarray(coarse_nodes, dtype=np.int64)
+    C = coarse.points
+    tol = extent_tol(C, tol)
+    index = -np.ones(coarse.n_points, dtype=np.int64)
+    index[nodes] = np.arange(len(nodes))
+    e = coarse.part_edges("contact")
+    k = min(4, len(e))
+    _d, cand = cKDTree(0.5 * (C[e[:, 0]] + C[e[:, 1]])).query(X, k=k)
+    cand = np.asarray(cand).reshape(len(X), k)
+    de, s = point_segment_distance(X[:, None, :], C[e[cand, 0]], C[e[cand, 1]])
+    j = np.argmin(de, axis=1)
+    r = np.arange(len(X))
+    if np.any(de[r, j] > tol):
+        b = int(np.flatnonzero(de[r, j] > tol)[0])
+        raise NonNestedMeshError(f"point {X[b].tolist()} is on no coarse contact edge")
+    edge = cand[r, j]
+    sj = s[r, j]
+    rows, cols, vals = [], [], []
+    for end, w in ((0, 1.0 - sj), (1, sj)):
+        col = index[e[edge, end]]
+        ok = col >= 0  # the clamped end of Gamma_C: w = 0
+        rows.append(r[ok])
+        cols.append(col[ok])
+        vals.append(w[ok])
+    M = sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(len(X), len(nodes)),
+    )
+    M.sum_duplicates()
+    return M
