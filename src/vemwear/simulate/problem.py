@@ -24,6 +24,7 @@ from ..contact import (
 from ..mesh.checks import check_mesh
 from ..mesh.polymesh import Mesh
 from ..solvers.system import ContactSystem, StepData
+from ..util.hashing import sha256_arrays
 from ..vem import Material, body_force_vector, stiffness, traction_vector
 from ..vem.assembly import Field
 from .timegrid import TimeGrid
@@ -134,6 +135,31 @@ class Problem:
             "kappa": desc(self.kappa),
             "v_star": self.v_star.describe(),  # type: ignore[union-attr]
             "stabilization": self.stabilization,
+        }
+
+    def fingerprint(self) -> dict[str, Any]:
+        """What determines the computed numbers: the physics and the discretization.
+
+        Solver options are not part of it: every solver that converges gives the same
+        solution to its tolerance. Data given as callables enter by their values (g,
+        mu and kappa at the contact nodes, v* at up to 65 sampled levels, the load
+        vector at t_0 and T) besides their names. Hash it with
+        :func:`vemwear.util.hashing.sha256_json`.
+        """
+        from .. import __version__
+
+        m, t = self.mesh, self.time.t
+        sample = np.unique(np.linspace(0, len(t) - 1, min(len(t), 65)).astype(np.int64))
+        d = self.discrete
+        return {
+            "format": "vemwear-problem/1",
+            "vemwear_version": __version__,
+            "description": self.describe(),
+            "mesh": sha256_arrays(m.points, m.cell_offsets, m.cell_vertices, m.boundary_tags),
+            "time": sha256_arrays(t),
+            "nodal": sha256_arrays(*(self.nodal[k] for k in ("g", "mu", "kappa"))),
+            "v_star": sha256_arrays(np.array([self.v_star(t[i]) for i in sample])),  # type: ignore[operator]
+            "load": sha256_arrays(d.load(float(t[0])), d.load(float(t[-1]))),
         }
 
 

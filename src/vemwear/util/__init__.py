@@ -1,0 +1,1 @@
+"""Small helpers with no numerics: hashing of inputs (and, later, atomic files)."""
