@@ -35,7 +35,8 @@ def _type(js: dict[str, Any], defs: dict[str, Any]) -> str:
     if "$ref" in js:
         return _type(defs[js["$ref"].rsplit("/", 1)[-1]], defs)
     if "oneOf" in js or "anyOf" in js:
-        forms = [_type(x, defs) for x in js.get("oneOf", js.get("anyOf", []))]
+        forms = [_type(x, defs) for x in js.get("oneOf", js.get("anyOf", []))]  # no TOML null
+        forms = [f for f in forms if f != "null"]
         return " or ".join(dict.fromkeys(forms))
     if "const" in js or "enum" in js:
         return ", ".join(f'`"{v}"`' for v in js.get("enum", [js.get("const")]))

@@ -115,8 +115,15 @@ def _pytype(tp: Any) -> Any:
         return Annotated[list[_pytype(args[0])], Field(min_length=len(args), max_length=len(args))]  # type: ignore[misc]
     if get_origin(tp) in (Union, types.UnionType):
         forms = {"array" if get_origin(a) is tuple else "number": _pytype(a) for a in args}
-        return by_kind(" or ".join(f"a{'n' * (k == 'array')} {k}" for k in forms), **forms)
+        return by_kind(" or ".join(map(_words, args)), **forms)
     return tp
+
+
+def _words(tp: Any) -> str:
+    """``'an integer'``, ``'an array of 2 numbers'``, ... (for messages)."""
+    if get_origin(tp) is tuple:
+        return f"an array of {len(get_args(tp))} {_words(get_args(tp)[0]).split()[-1]}s"
+    return {int: "an integer", float: "a number"}.get(tp, str(tp))
 
 
 Vector: TypeAlias = Annotated[list[float], Field(min_length=2, max_length=2)]
