@@ -22,8 +22,8 @@ import meshio
 import numpy as np
 import pytest
 
-from vemwear.cli.config import load_config
 from vemwear.cli.main import main
+from vemwear.config import load_config
 from vemwear.mesh import squares_with_hanging_nodes, write_mesh
 
 DATA = Path(__file__).resolve().parent / "data" / "bad"
@@ -321,7 +321,7 @@ EXPRESSION_ERRORS = [
     ("text", "message"), EXPRESSION_ERRORS, ids=[t[:20] for t, _ in EXPRESSION_ERRORS]
 )
 def test_expression_language_is_a_whitelist(text: str, message: str) -> None:
-    from vemwear.cli.expr import ExpressionError, parse_expression
+    from vemwear.config.expr import ExpressionError, parse_expression
 
     with pytest.raises(ExpressionError) as info:
         parse_expression(text, ("x", "y"), where="[contact] g")

@@ -73,7 +73,10 @@ def test_check_invalid_is_exit_2_without_traceback(
     small.write_text(SMALL.replace("mu = 0.2", "mu = -0.2"))
     assert main(["check", str(small)]) == 2
     err = capsys.readouterr().err
-    assert err == f"vemwear: error: {small}: [contact] mu must be >= 0, got -0.2\n"
+    assert err == (
+        f"vemwear: error: {small}: [contact] mu must be >= 0 on the contact part; it is -0.2 "
+        "at contact node 0 (vertex 1, x = [0.25, 0.0])\n"
+    )
     assert main(["check", str(small), "--debug"]) == 2
     assert "Traceback" in capsys.readouterr().err
 

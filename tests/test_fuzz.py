@@ -28,8 +28,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from conftest import small_config
-from vemwear.cli.config import Config, ConfigError, parse_config
-from vemwear.cli.expr import ExpressionError, parse_expression
+from vemwear.config import Config, ConfigError, parse_config
+from vemwear.config.expr import ExpressionError, parse_expression
 from vemwear.contact import LinearCompliance, TableCompliance
 from vemwear.mesh import (
     distorted_quads,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import meshio
@@ -12,7 +13,7 @@ import numpy as np
 import pytest
 
 from vemwear.cli.main import main
-from vemwear.cli.mesh_cmd import FAMILIES, contact_nodes, generate_mesh, hanging_nodes
+from vemwear.cli.mesh_cmd import contact_nodes, generate_mesh, hanging_nodes
 from vemwear.mesh import (
     PARTS,
     Mesh,
@@ -24,6 +25,7 @@ from vemwear.mesh import (
     tag_rectangle,
     write_mesh,
 )
+from vemwear.mesh.registry import FAMILIES
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -336,7 +338,7 @@ def test_convert_roundtrips(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
         ),
         (
             ["generate", "distorted", "-o", "{d}/v.vtu", "--param", "amplitde=0.1"],
-            "--param amplitde: family 'distorted' has no such parameter; did you mean 'amplitude'?",
+            "--param amplitde: family 'distorted' has no such option; did you mean 'amplitude'?",
         ),
         (
             ["generate", "distorted", "-o", "{d}/v.vtu", "--param", "seed=2"],
@@ -422,13 +424,64 @@ def test_hanging_and_contact_nodes() -> None:
     assert len(h) == 10  # 16 side midpoints of the 4 split cells, 6 on the boundary
 
 
-def test_config_and_cli_share_family_names(tmp_path):
-    """Every short name of ``vemwear mesh generate`` also works in a config."""
-    from vemwear.cli.config import mesh_families
-    from vemwear.cli.mesh_cmd import FAMILIES
-    from vemwear.mesh import GENERATORS
+def test_config_and_cli_share_the_registry(tmp_path: Path) -> None:
+    """Every family and alias of the registry works in a config and gives the command's mesh."""
+    from vemwear.config import parse_config
+    from vemwear.config.schema import MESH_FORMS
 
-    assert set(FAMILIES) == set(GENERATORS)
-    fams = mesh_families()
-    for name, fn in GENERATORS.items():
-        assert fams[name] is fn, name
+    assert set(MESH_FORMS) == {*FAMILIES, "file"}
+    cfg = tomllib.loads((ROOT / "examples" / "example_5_2_set1.toml").read_text())
+    for name, fam in FAMILIES.items():
+        seed = 3 if fam.option("seed") else None
+        if fam.option("n_cells"):
+            expected = generate_mesh(name, cells=20, seed=seed)
+            keys: dict[str, object] = {"n_cells": 20}
+        else:
+            expected = generate_mesh(name, divisions=(4, 2), seed=seed)
+            keys = {"divisions": [4, 2]}
+        keys.update({"seed": seed} if seed is not None else {})
+        for alias in (name, *fam.aliases):
+            cfg["mesh"] = {"generator": alias, **keys}
+            mesh = parse_config(cfg, source="c.toml").problem.mesh
+            np.testing.assert_array_equal(mesh.points, expected.points)
+            np.testing.assert_array_equal(mesh.cell_vertices, expected.cell_vertices)
+
+
+def test_registry_options_are_generator_parameters() -> None:
+    """Each option is a parameter of its generator, with the generator's default."""
+    import inspect
+
+    from vemwear.mesh import voronoi_mesh
+
+    for fam in FAMILIES.values():
+        params = dict(inspect.signature(fam.function).parameters)
+        if any(p.kind is p.VAR_KEYWORD for p in params.values()):
+            params = {**inspect.signature(voronoi_mesh).parameters, **params}
+        for opt in fam.options:
+            assert opt.name in params, (fam.name, opt.name)
+            default = params[opt.name].default
+            assert opt.default == (None if default is inspect.Parameter.empty else default)
+    with pytest.raises(ValueError, match=r"'hexagon' is not a known mesh family; did you mean"):
+        from vemwear.mesh.registry import family
+
+        family("hexagon")
+
+
+def test_every_generator_of_vemwear_mesh_is_registered() -> None:
+    """A public function of vemwear.mesh that makes a Mesh from scratch is a family (or an
+    alias of one), so that configs and ``vemwear mesh generate`` know it."""
+    import inspect
+
+    import vemwear.mesh as vm
+
+    names = {n for f in FAMILIES.values() for n in (f.name, f.function.__name__, *f.aliases)}
+    generators = [
+        n
+        for n in vm.__all__
+        if inspect.isfunction(getattr(vm, n))
+        and "Mesh" in str(inspect.signature(getattr(vm, n)).return_annotation)
+        and "mesh" not in inspect.signature(getattr(vm, n)).parameters
+        and n not in ("read_mesh", "check_mesh", "tag_rectangle")
+    ]
+    assert len(generators) >= 9
+    assert not [n for n in generators if n not in names]

@@ -1,4 +1,4 @@
-"""The ``vemwear`` command: ``run``, ``check``, ``example``, ``paper`` and ``manufactured``.
+"""The ``vemwear`` command: ``run``, ``check``, ``schema``, ``example``, ``paper``, ...
 
 Exit codes (also in ``vemwear --help`` and ``docs/config.md``): 0 success,
 1 unexpected internal error, 2 invalid input (configuration, mesh, data, output
@@ -20,12 +20,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
+from ..config import ConfigError
 from ..solvers import SOLVERS
-from .config import ConfigError, load_config, smallness_report
 from .output import OutputDirError, atomic_output_dir, check_output_dir
 
 if TYPE_CHECKING:
-    from ..simulate import Result, SolverOptions
+    from ..simulate import Problem, Result, SolverOptions
 
 __all__ = [
     "EXIT_CONVERGENCE",
@@ -151,6 +151,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("config", metavar="CONFIG.toml", help="configuration file (docs/config.md)")
     _common(p, solve=False)
     p.set_defaults(func=cmd_check)
+
+    d = "Print the JSON Schema of configuration files (for editors' completion and checks)."
+    p = _subcommand(sub, "schema", d)
+    p.add_argument("--indent", type=int, default=2, metavar="N", help="indentation (default 2)")
+    p.set_defaults(func=cmd_schema)
 
     d = "Run one of the paper's numerical examples and write its figures and report."
     examples = available_examples()
@@ -359,6 +364,49 @@ def _say(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
+def smallness_report(problem: Problem, max_dofs: int = 200_000) -> tuple[str, str | None]:
+    """The smallness condition of Theorem 3.4, estimated for ``vemwear check`` and ``run``.
+
+    Parameters
+    ----------
+    problem : Problem
+        A validated problem (its discretization is assembled here).
+    max_dofs : int
+        Skip the estimate (an eigenvalue problem) above this number of dofs.
+
+    Returns
+    -------
+    row : str
+        A one-line summary of the estimate ``L_p ||mu|| c_0^2 / C_1``, for the
+        ``check`` table.
+    warning : str or None
+        A warning when the condition is doubtful (estimate >= 1), else None.
+    """
+    import warnings
+
+    if 2 * problem.mesh.n_points > max_dofs:
+        return f"not estimated (more than {max_dofs} dofs)", None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        est = problem.discrete.smallness_estimate()
+    r = float(est.get("ratio", float("nan")))
+    if not math.isfinite(r):
+        return "not estimated", None
+    if r < 1:
+        return f"L_p ||mu|| c0^2/C1 ~= {r:.3g} < 1: holds", None
+    row = (
+        f"L_p ||mu|| c0^2/C1 ~= {r:.3g} >= 1: MAY FAIL (step problems may not be uniquely solvable)"
+    )
+    warning = (
+        f"the smallness condition of Theorem 3.4 is doubtful: L_p ||mu|| c0^2/C1 "
+        f"~= {r:.3g} >= 1 (L_p = {est.get('L_p', float('nan')):g}, max mu = "
+        f"{est.get('mu_max', float('nan')):g}, c0^2/C1 ~= "
+        f"{est.get('c0_sq_over_C1', float('nan')):.3g}); the step problems may not be "
+        "uniquely solvable and the solver may fail; reduce mu or the stiffness of p"
+    )
+    return row, warning
+
+
 # ---------------------------------------------------------------------------- commands
 def cmd_run(args: argparse.Namespace) -> int:
     """``vemwear run CONFIG -o OUTDIR [--resume]``: validate, solve, write, summarize.
@@ -366,6 +414,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     A run that stops after finishing some levels keeps them in ``OUTDIR.partial``;
     ``--resume`` continues from there (:mod:`vemwear.cli.resume`).
     """
+    from ..config import load_config
     from .resume import execute_run, prepare_run
 
     t0 = time.perf_counter()
@@ -396,6 +445,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     """``vemwear check CONFIG``: validate and describe the problem, no solve."""
     import numpy as np
 
+    from ..config import load_config
     from ..mesh import PARTS, part_code
     from ..solvers import resolve_backend
 
@@ -469,6 +519,16 @@ def cmd_check(args: argparse.Namespace) -> int:
     print(f"{PROG}: {args.config}: {cfg.title}: valid\n" + _rows(rows))
     if warning:
         _say(f"{PROG}: warning: {warning}")
+    return EXIT_OK
+
+
+def cmd_schema(args: argparse.Namespace) -> int:
+    """``vemwear schema``: the JSON Schema of configuration files."""
+    import json
+
+    from ..config import config_json_schema
+
+    print(json.dumps(config_json_schema(), indent=args.indent))
     return EXIT_OK
 
 

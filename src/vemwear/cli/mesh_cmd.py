@@ -1,9 +1,9 @@
 """The ``vemwear mesh`` commands: ``generate``, ``inspect``, ``plot`` and ``convert``.
 
 ``vemwear mesh generate FAMILY -o FILE``
-    Build a mesh of a rectangle from one of the families of :mod:`vemwear.mesh`
-    (:data:`FAMILIES`), tag the paper's boundary parts (clamped left side, traction
-    top and right sides, contact bottom side), optionally refine it along the
+    Build a mesh of a rectangle from one of the families of
+    :data:`vemwear.mesh.registry.FAMILIES`, tag the paper's boundary parts (clamped left
+    side, traction top and right sides, contact bottom side), optionally refine it along the
     contact part (hanging nodes) and write it as ``.vtu`` (any polygons) or ``.msh``
     (gmsh 2.2: triangles and quadrilaterals only).
 ``vemwear mesh inspect FILE_OR_CONFIG``
@@ -29,15 +29,12 @@ from __future__ import annotations
 import argparse
 import ast
 import contextlib
-import difflib
-import inspect
 import io
 import json
 import math
 import os
 import sys
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -45,7 +42,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..mesh import (
-    GENERATORS,
     PARTS,
     Mesh,
     MeshError,
@@ -57,6 +53,7 @@ from ..mesh import (
     write_mesh,
 )
 from ..mesh.checks import check_boundary, check_cells, check_conforming, check_vertices
+from ..mesh.registry import FAMILIES
 from .output import OutputDirError, atomic_file
 
 if TYPE_CHECKING:
@@ -65,9 +62,7 @@ if TYPE_CHECKING:
     from ..mesh import QualityReport
 
 __all__ = [
-    "FAMILIES",
     "MESH_SUFFIXES",
-    "Family",
     "add_parser",
     "contact_nodes",
     "generate_mesh",
@@ -98,79 +93,6 @@ PART_SYMBOLS: dict[str, str] = {
 
 
 # ---------------------------------------------------------------------------- families
-@dataclass(frozen=True)
-class Family:
-    """A mesh family of ``vemwear mesh generate``.
-
-    Attributes
-    ----------
-    name : str
-        The command-line name, a key of :data:`vemwear.mesh.GENERATORS`.
-    function : callable
-        The generator, ``GENERATORS[name]``; called with ``size`` and, as given,
-        ``divisions``, ``n_cells``, ``seed`` and further keyword arguments.
-    description : str
-        One line for ``--help``.
-    cells_per_division : int
-        Cells per grid rectangle (1 for quadrilateral grids, 2 for triangles), so that
-        ``--cells N`` can be turned into divisions; 0 if ``--cells`` does not apply
-        (the count depends on the divisions in another way).
-    takes_divisions, takes_cells, takes_seed : bool
-        Which of ``--divisions``, ``--cells`` (as ``n_cells``) and ``--seed`` the
-        generator accepts.
-    """
-
-    name: str
-    description: str
-    cells_per_division: int = 1
-    takes_divisions: bool = True
-    takes_cells: bool = False
-    takes_seed: bool = False
-
-    @property
-    def function(self) -> Callable[..., Mesh]:
-        return GENERATORS[self.name]
-
-
-#: The families of ``vemwear mesh generate``, by command-line name.
-FAMILIES: dict[str, Family] = {
-    f.name: f
-    for f in (
-        Family("squares", "axis-aligned rectangles, nx * ny cells"),
-        Family(
-            "triangles",
-            "each grid rectangle cut into two triangles, 2 * nx * ny cells",
-            cells_per_division=2,
-        ),
-        Family(
-            "voronoi",
-            "centroidal Voronoi polygons, exactly --cells cells (the paper's mesh B)",
-            cells_per_division=0,
-            takes_divisions=False,
-            takes_cells=True,
-            takes_seed=True,
-        ),
-        Family(
-            "distorted",
-            "grid quadrilaterals with randomly moved interior vertices",
-            takes_seed=True,
-        ),
-        Family(
-            "hexagons",
-            "hexagon-dominant (Voronoi cells of a triangular lattice)",
-            cells_per_division=0,
-        ),
-        Family("nonconvex", "chevron-shaped non-convex cells, nx * ny cells"),
-        Family(
-            "hanging",
-            "squares, every other one split in four (hanging nodes in the others)",
-            cells_per_division=0,
-            takes_seed=True,
-        ),
-    )
-}
-
-
 def _divisions_for(n: int, per: int, size: tuple[float, float], family: str) -> tuple[int, int]:
     """Grid ``(nx, ny)`` with ``per * nx * ny == n`` whose rectangles are closest to squares."""
     if n < 1 or n % per:
@@ -219,12 +141,12 @@ def generate_mesh(
     refine_contact: int = 0,
     boundary: str = "paper",
 ) -> Mesh:
-    """Generate a mesh of the rectangle ``[0, lx] x [0, ly]`` from one of :data:`FAMILIES`.
+    """Generate a mesh of the rectangle ``[0, lx] x [0, ly]`` of a mesh family.
 
     Parameters
     ----------
     family : str
-        A key of :data:`FAMILIES`.
+        A key of :data:`vemwear.mesh.registry.FAMILIES`.
     size : (lx, ly)
         Side lengths (default: the paper's ``(2, 1)``).
     cells : int, optional
@@ -260,6 +182,7 @@ def generate_mesh(
     if family not in FAMILIES:
         raise MeshError(f"unknown mesh family {family!r}; available: {', '.join(FAMILIES)}")
     fam = FAMILIES[family]
+    takes = {o.name for o in fam.options}
     if boundary not in ("paper", "none"):
         raise MeshError(f"--boundary must be 'paper' or 'none', got {boundary!r}")
     lx, ly = (float(s) for s in size)
@@ -273,7 +196,7 @@ def generate_mesh(
     if cells is not None and divisions is not None:
         raise MeshError("give either --cells or --divisions, not both")
     if cells is not None:
-        if fam.takes_cells:
+        if "n_cells" in takes:
             if cells < 1:
                 raise MeshError(f"--cells must be >= 1, got {cells}")
             kwargs["n_cells"] = int(cells)
@@ -287,34 +210,27 @@ def generate_mesh(
                 "follows from the divisions); give --divisions NX NY"
             )
     if divisions is not None:
-        if not fam.takes_divisions:
+        if "divisions" not in takes:
             raise MeshError(f"family {family!r} does not take --divisions; give --cells N")
         nx, ny = (int(d) for d in divisions)
         if nx < 1 or ny < 1:
             raise MeshError(f"--divisions must be positive integers, got {nx} {ny}")
         kwargs["divisions"] = (nx, ny)
     if seed is not None:
-        if not fam.takes_seed:
+        if "seed" not in takes:
             raise MeshError(f"family {family!r} is deterministic: --seed does not apply")
         kwargs["seed"] = int(seed)
-    sig = inspect.signature(fam.function).parameters
-    known = [k for k, v in sig.items() if v.kind is not v.VAR_KEYWORD]
-    open_ended = len(known) < len(sig)  # **kwargs: passed on, checked by the callee
     for key, value in (params or {}).items():
         if key in ("n_cells", "divisions", "seed", "size"):
             raise MeshError(f"--param {key}: use the option --{key.replace('n_', '')} instead")
-        if key not in known and not open_ended:
-            close = difflib.get_close_matches(key, known, n=1)
-            hint = f"did you mean {close[0]!r}? " if close else ""
-            raise MeshError(
-                f"--param {key}: family {family!r} has no such parameter; {hint}"
-                f"its parameters: {', '.join(known)}"
-            )
         kwargs[key] = value
     try:
-        mesh = fam.function(**kwargs)
+        mesh = fam.generate(**kwargs)
     except (TypeError, ValueError) as exc:
-        raise MeshError(f"family {family!r}: {exc}") from exc
+        msg = str(exc)
+        raise MeshError(
+            f"--param {msg}" if msg.startswith(tuple(params or ())) else f"family {family!r}: {msg}"
+        ) from exc
     if boundary == "paper":
         mesh = tag_rectangle(mesh)
     if refine_contact:
@@ -331,33 +247,23 @@ def _quiet() -> Iterator[io.StringIO]:
         yield chatter
 
 
-def load_mesh(path: str | os.PathLike[str]) -> Mesh:
-    """The mesh of a mesh file, or the tagged mesh of a configuration file (``.toml``).
+def load_mesh(path: str | os.PathLike[str], *, check: bool = True) -> Mesh:
+    """The mesh of a mesh file (:func:`vemwear.mesh.read_mesh`), or the tagged mesh of a
+    configuration file (``.toml``).
 
     Raises
     ------
     MeshError
-        If the file does not exist or cannot be read as a mesh.
+        If the file does not exist, cannot be read as a mesh or (with ``check``) is not
+        a valid mesh.
     ConfigError
         If a configuration file is invalid.
     """
-    p = Path(path)
-    if not p.is_file():
-        raise MeshError(f"{p}: no such file" if not p.exists() else f"{p}: not a file")
-    if p.suffix.lower() == ".toml":
-        from .config import load_config
+    if Path(path).suffix.lower() == ".toml" and Path(path).is_file():
+        from ..config import load_config
 
-        return load_config(p).problem.mesh
-    with _quiet():  # read_mesh turns meshio's errors (and its sys.exit) into a MeshError
-        try:
-            return read_mesh(p)
-        except (OSError, ValueError) as exc:  # MeshError is a ValueError
-            msg = str(exc)
-            raise MeshError(msg if msg.startswith(str(p)) else f"{p}: {msg}") from exc
-        except (IndexError, KeyError) as exc:  # malformed content (e.g. a file without points)
-            raise MeshError(
-                f"{p}: cannot read mesh (malformed file: {type(exc).__name__}: {exc})"
-            ) from exc
+        return load_config(path).problem.mesh
+    return read_mesh(path, check=check)
 
 
 def _check_target(path: Path, force: bool, suffixes: Sequence[str] | None) -> Path:
@@ -710,7 +616,7 @@ def cmd_inspect(args: argparse.Namespace) -> int:
     """``vemwear mesh inspect FILE_OR_CONFIG``: counts, validity, A1 quality."""
     from .main import EXIT_INPUT, EXIT_OK, PROG
 
-    mesh = load_mesh(args.file)
+    mesh = load_mesh(args.file, check=False)  # the summary says what is wrong
     s = mesh_summary(mesh)
     if args.json:
         print(json.dumps({k: v for k, v in s.items() if not k.startswith("_")}, indent=2))
@@ -732,7 +638,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
     types = tuple(f".{s}" for s in Figure().canvas.get_supported_filetypes())
     out = _check_target(Path(args.output), args.force, types)
-    mesh = load_mesh(args.file)
+    mesh = load_mesh(args.file, check=False)  # an invalid mesh is drawn as it is
     if args.quality:
         check_cells(mesh)  # the kernel disks need counter-clockwise simple cells
     fig = plot_mesh(

@@ -38,10 +38,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
-from .config import Config
 from .output import OutputDirError, atomic_output_dir, check_output_dir, write_outputs
 
 if TYPE_CHECKING:
+    from ..config import Config
     from ..simulate import Result, SolverOptions
 
 __all__ = [

@@ -39,7 +39,11 @@ def nodal_values(spec: NodalField, cb: ContactBoundary, name: str) -> NDArray[np
     else:
         v = np.full(cb.m, float(spec))
     if not np.all(np.isfinite(v)):
-        raise ValueError(f"{name}: values along the contact part must be finite")
+        a = int(np.flatnonzero(~np.isfinite(v))[0])
+        raise ValueError(
+            f"{name} is not finite on the contact part: it is {v[a]:g} at contact node {a} "
+            f"(vertex {cb.nodes[a]}, x = {cb.points[a].tolist()})"
+        )
     return v
 
 

@@ -1,7 +1,7 @@
 """Polygonal meshes: the mesh type, generators, boundary parts, checks, file I/O and point
 location."""
 
-from .boundary import segment_predicate, side_predicate, tag_rectangle
+from .boundary import segment_predicate, select_parts, side_predicate, tag_rectangle
 from .checks import check_mesh
 from .families import (
     distorted_quads,
@@ -26,7 +26,6 @@ from .voronoi import (
 )
 
 __all__ = [
-    "GENERATORS",
     "PARTS",
     "Mesh",
     "MeshError",
@@ -54,6 +53,7 @@ __all__ = [
     "refine_cells",
     "refine_where",
     "segment_predicate",
+    "select_parts",
     "side_predicate",
     "squares_with_hanging_nodes",
     "tag_rectangle",
@@ -61,15 +61,3 @@ __all__ = [
     "voronoi_mesh",
     "write_mesh",
 ]
-
-#: Mesh families by the short names that configs (``[mesh] generator = NAME``) and
-#: ``vemwear mesh generate NAME`` share; configs also accept the function names.
-GENERATORS = {
-    "squares": rectangle_squares,
-    "triangles": rectangle_triangles,
-    "voronoi": rectangle_voronoi,
-    "distorted": distorted_quads,
-    "hexagons": hexagons,
-    "nonconvex": nonconvex_mesh,
-    "hanging": squares_with_hanging_nodes,
-}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,6 +45,72 @@ def segment_predicate(a: Sequence[float], b: Sequence[float], rtol: float = 1e-9
         return (dist <= tol) & (s >= -tol) & (s <= L + tol)
 
     return pred
+
+
+def _pt(p: NDArray[np.float64]) -> str:
+    return f"({p[0]:.6g}, {p[1]:.6g})"
+
+
+def select_parts(mesh: Mesh, parts: Mapping[str, Any]) -> Mesh:
+    """Tag boundary parts given by selectors; every edge selected by at most one part.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    parts : mapping
+        ``{part: selector}``. A selector is a side of the bounding box (``"left"``,
+        ``"right"``, ``"bottom"``, ``"top"``), a segment ``(a, b)`` (the boundary edges
+        lying on it), a list of these, or ``"rest"`` (the edges no other part selects;
+        one part at most). Edges are selected by their midpoints.
+
+    Returns
+    -------
+    Mesh
+        With these parts tagged (other tags removed).
+
+    Raises
+    ------
+    ValueError
+        If a selector selects no edge or two parts select the same edge; the message
+        starts with the part and names an edge by its vertex ids and end points.
+    """
+    edges = mesh.boundary_edges
+    mid = mesh.edge_midpoints(edges)
+    hits: dict[str, NDArray[np.bool_]] = {}
+    for name, spec in parts.items():
+        if isinstance(spec, str) and spec == "rest":
+            continue
+        hit = np.zeros(len(edges), dtype=bool)
+        for it in [spec] if isinstance(spec, str | tuple) else spec:
+            try:
+                pred = side_predicate(mesh, it) if isinstance(it, str) else segment_predicate(*it)
+            except ValueError as exc:
+                raise ValueError(f"{name}: {exc}") from None
+            hit |= np.asarray(pred(mid), dtype=bool)
+        if not hit.any():
+            lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
+            raise ValueError(
+                f"{name} selects no boundary edge (the mesh spans [{lo[0]:g}, {hi[0]:g}] x "
+                f"[{lo[1]:g}, {hi[1]:g}]; segments select the boundary edges lying on them)"
+            )
+        for other, ohit in hits.items():
+            both = np.flatnonzero(hit & ohit)
+            if both.size:
+                a, b = edges[both[0]]
+                more = f" and {both.size - 1} more" if both.size > 1 else ""
+                raise ValueError(
+                    f"parts {other!r} and {name!r} overlap: both select the boundary edge "
+                    f"({a}, {b}) from {_pt(mesh.points[a])} to {_pt(mesh.points[b])}{more}; "
+                    "every boundary edge must belong to exactly one part"
+                )
+        hits[name] = hit
+    rest = [n for n in parts if n not in hits]
+    if len(rest) > 1:
+        raise ValueError(f"only one part can be 'rest', got {', '.join(rest)}")
+    if rest and hits and np.all(np.any(list(hits.values()), axis=0)):
+        raise ValueError(f"{rest[0]} selects no boundary edge: every edge is in another part")
+    preds: dict[str, Any] = {n: (lambda m, h=h: h) for n, h in hits.items()}
+    return mesh.with_boundary({**preds, **dict.fromkeys(rest, "rest")})
 
 
 def tag_rectangle(

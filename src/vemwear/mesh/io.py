@@ -4,17 +4,20 @@ Cells of any vertex count are stored as meshio blocks (``triangle``, ``quad``,
 ``polygon``); boundary parts as ``line`` cells with an integer cell-data field
 ``part`` (1 clamped, 2 traction, 3 contact). Gmsh files may instead name their
 boundary lines by physical groups called ``clamped``, ``traction`` and ``contact``.
+:func:`read_mesh` is the one reader of mesh files: it checks what it reads.
 """
 
 from __future__ import annotations
 
 import contextlib
 import io
+import os
 from pathlib import Path
 
 import meshio
 import numpy as np
 
+from .checks import check_cells, check_conforming, check_vertices
 from .polymesh import PARTS, Mesh, MeshError
 
 _BLOCK = {3: "triangle", 4: "quad"}
@@ -39,14 +42,18 @@ def to_meshio(mesh: Mesh, with_boundary: bool = True) -> meshio.Mesh:
     return meshio.Mesh(pts, blocks, cell_data=cell_data)
 
 
-def from_meshio(m: meshio.Mesh, source: str = "mesh") -> Mesh:
-    """Build a :class:`Mesh` from a meshio mesh; 2D cells are reordered by cell id if present."""
+def from_meshio(m: meshio.Mesh) -> Mesh:
+    """Build a :class:`Mesh` from a meshio mesh; 2D cells are reordered by cell id if present.
+
+    Boundary parts come from ``line`` cells (see the module docstring); a line tagged
+    with two different parts is a :class:`MeshError`.
+    """
     pts = np.asarray(m.points, dtype=float)
     if pts.ndim != 2 or len(pts) == 0:
-        raise MeshError(f"{source}: no points found")
+        raise MeshError("no points found")
     if pts.shape[1] > 2:
         if np.any(np.abs(pts[:, 2:]) > 1e-12 * max(1.0, np.abs(pts).max())):
-            raise MeshError(f"{source}: points are not in the plane z = 0")
+            raise MeshError("points are not in the plane z = 0")
         pts = pts[:, :2]
     cells: list[np.ndarray] = []
     order: list[np.ndarray] = []
@@ -64,14 +71,14 @@ def from_meshio(m: meshio.Mesh, source: str = "mesh") -> Mesh:
                 tag = np.asarray(m.cell_data["part"][bi], dtype=np.int64)
             elif "gmsh:physical" in m.cell_data:
                 phys = np.asarray(m.cell_data["gmsh:physical"][bi], dtype=np.int64)
-                tag = np.array([_gmsh_part(names.get(int(p), ""), source) for p in phys])
+                tag = np.array([_gmsh_part(names.get(int(p), "")) for p in phys])
             line_blocks.append((data, tag))
         elif block.type in ("vertex",):
             continue
         else:
-            raise MeshError(f"{source}: cell type {block.type!r} is not a polygon")
+            raise MeshError(f"cell type {block.type!r} is not a polygon")
     if not cells:
-        raise MeshError(f"{source}: no polygonal cells found")
+        raise MeshError("no polygonal cells found")
     ids = np.concatenate(order)
     if np.all(ids >= 0) and len(np.unique(ids)) == len(ids):
         cells = [cells[i] for i in np.argsort(ids)]
@@ -83,54 +90,125 @@ def from_meshio(m: meshio.Mesh, source: str = "mesh") -> Mesh:
     remap[used] = np.arange(int(used.sum()))
     mesh = Mesh.from_cells(pts[used], [remap[c] for c in cells])
     if line_blocks:
-        mesh = _apply_line_tags(mesh, line_blocks, remap, source)
+        mesh = _apply_line_tags(mesh, line_blocks, remap)
     return mesh
 
 
-def _gmsh_part(name: str, source: str) -> int:
+def _gmsh_part(name: str) -> int:
     if name not in PARTS:
         raise MeshError(
-            f"{source}: physical group {name!r} on boundary lines is not one of {', '.join(PARTS)}"
+            f"physical group {name!r} on boundary lines is not one of {', '.join(PARTS)}"
         )
     return PARTS.index(name) + 1
 
 
-def _apply_line_tags(mesh: Mesh, blocks, remap: np.ndarray, source: str) -> Mesh:
+def _apply_line_tags(mesh: Mesh, blocks, remap: np.ndarray) -> Mesh:
     n = mesh.n_points
     be = mesh.boundary_edges
     key = np.minimum(be[:, 0], be[:, 1]) * n + np.maximum(be[:, 0], be[:, 1])
+    srt = np.argsort(key)
+    lines = [(d, t) for d, t in blocks if t is not None]
+    if not lines:
+        return mesh
+    data = np.concatenate([d for d, _ in lines])  # vertex ids of the file
+    tag = np.concatenate([t for _, t in lines])
+    e = remap[data]
+    ok = np.all(e >= 0, axis=1) & (tag > 0)
+    data, tag, e = data[ok], tag[ok], e[ok]
+    k = np.minimum(e[:, 0], e[:, 1]) * n + np.maximum(e[:, 0], e[:, 1])
+    pos = np.clip(np.searchsorted(key[srt], k), 0, len(key) - 1)
+    found = key[srt[pos]] == k
+    if not np.all(found):
+        bad = data[~found][:3].tolist()
+        raise MeshError(f"tagged lines {bad} are not boundary edges of the cells")
+    _, first, inv = np.unique(k, return_index=True, return_inverse=True)
+    clash = np.flatnonzero(tag != tag[first][inv])
+    if clash.size:
+        i = clash[0]
+        a, b = data[i].tolist()
+        old, new = (PARTS[int(c) - 1] for c in (tag[first][inv][i], tag[i]))
+        raise MeshError(
+            f"boundary edge ({a}, {b}) is tagged both {old!r} and {new!r}; every boundary "
+            "edge must belong to exactly one part"
+        )
     tags = np.array(mesh.boundary_tags, copy=True)
-    for data, tag in blocks:
-        if tag is None:
-            continue
-        e = remap[data]
-        ok = np.all(e >= 0, axis=1)
-        e, t = e[ok], tag[ok]
-        k = np.minimum(e[:, 0], e[:, 1]) * n + np.maximum(e[:, 0], e[:, 1])
-        srt = np.argsort(key)
-        pos = np.clip(np.searchsorted(key[srt], k), 0, len(key) - 1)
-        found = key[srt[pos]] == k
-        if not np.all(found):
-            bad = e[~found][:3].tolist()
-            raise MeshError(f"{source}: tagged lines {bad} are not boundary edges of the cells")
-        tags[srt[pos]] = t
+    tags[srt[pos]] = tag
     return Mesh(mesh.points, mesh.cell_offsets, mesh.cell_vertices, tags)
 
 
-def read_mesh(path: str | Path) -> Mesh:
-    """Read a mesh file (any format meshio reads, e.g. ``.vtu``, ``.msh``)."""
+def _check_dangling(m: meshio.Mesh) -> None:
+    """Vertices that no polygonal cell uses (the reader would drop them)."""
+    n = len(m.points)
+    used = np.zeros(n, dtype=bool)
+    for block in m.cells:
+        if block.type in _POLY_TYPES or block.type.startswith("polygon"):
+            ids = np.asarray(block.data, dtype=np.int64).ravel()
+            if ids.size and (ids.min() < 0 or ids.max() >= n):
+                raise MeshError(f"cells refer to vertex ids outside 0..{n - 1}")
+            used[ids] = True
+    if used.any() and not used.all():
+        bad = np.flatnonzero(~used)
+        more = f" and {bad.size - 10} more" if bad.size > 10 else ""
+        raise MeshError(
+            f"vertices {bad[:10].tolist()}{more} belong to no cell (dangling); remove them "
+            "from the file"
+        )
+
+
+def read_mesh(path: str | os.PathLike[str], *, check: bool = True) -> Mesh:
+    """Read a mesh file (any format meshio reads, e.g. ``.vtu``, ``.msh``) and check it.
+
+    Parameters
+    ----------
+    path : str or Path
+    check : bool
+        Check the mesh: no dangling vertices (used by no cell; ``.msh`` files may keep
+        geometry points, which are dropped), no duplicate vertices, no cell listing a
+        vertex twice, no degenerate, clockwise or self-intersecting cells, no
+        overlapping cells, conforming edges (:mod:`vemwear.mesh.checks`). Without it
+        the mesh is only read (to inspect an invalid mesh).
+
+    Returns
+    -------
+    Mesh
+        With the boundary parts tagged in the file.
+
+    Raises
+    ------
+    MeshError
+        ``"{path}: ..."``: no such file, a file meshio cannot read, content that is
+        not a polygonal mesh, an edge tagged with two parts, or a failed check (the
+        message names the cells, vertices or edges by their ids in the file).
+    """
     path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"mesh file not found: {path}")
+    if not path.is_file():
+        raise MeshError(f"{path}: {'not a file' if path.exists() else 'no such file'}")
+    chatter = io.StringIO()  # meshio prints its reasons (and some readers call sys.exit)
     try:
-        # some meshio readers print to stdout, and some call sys.exit on bad files
-        with contextlib.redirect_stdout(io.StringIO()):
+        with contextlib.redirect_stdout(chatter), contextlib.redirect_stderr(chatter):
             m = meshio.read(path)
-    except SystemExit:  # some meshio readers exit on files they cannot parse
-        raise MeshError(f"{path}: cannot read mesh (meshio could not parse it)") from None
+    except SystemExit:
+        why = " ".join(chatter.getvalue().split())
+        raise MeshError(
+            f"{path}: cannot read mesh (meshio could not parse it{f': {why}' if why else ''})"
+        ) from None
     except Exception as exc:  # meshio raises many kinds; report them as one
         raise MeshError(f"{path}: cannot read mesh ({exc or type(exc).__name__})") from None
-    return from_meshio(m, source=str(path))
+    try:
+        if check and path.suffix.lower() != ".msh":
+            _check_dangling(m)
+        mesh = from_meshio(m)
+        if check:
+            check_vertices(mesh)
+            check_cells(mesh)
+            check_conforming(mesh)
+    except MeshError as exc:
+        raise MeshError(f"{path}: {exc}") from None
+    except (ValueError, IndexError, KeyError, TypeError) as exc:  # malformed content
+        raise MeshError(
+            f"{path}: cannot read mesh (malformed file: {type(exc).__name__}: {exc})"
+        ) from None
+    return mesh
 
 
 def write_mesh(mesh: Mesh, path: str | Path, file_format: str | None = None) -> None:

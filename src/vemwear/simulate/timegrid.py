@@ -46,7 +46,7 @@ class TimeGrid:
         """Levels from an explicit list of step sizes ``k_0, k_1, ...``."""
         k = np.asarray(steps, dtype=float)
         if k.ndim != 1 or k.size == 0 or np.any(~(k > 0)):
-            raise ValueError("time grid: step sizes must be a non-empty list of positive numbers")
+            raise ValueError(f"time grid: step sizes must be positive numbers, got {k.tolist()}")
         return cls(np.concatenate([[0.0], np.cumsum(k)]))
 
     @classmethod
@@ -57,7 +57,7 @@ class TimeGrid:
         """
         k = np.asarray(pattern, dtype=float)
         if k.ndim != 1 or k.size == 0 or np.any(~(k > 0)):
-            raise ValueError("time grid: pattern must be a non-empty list of positive step sizes")
+            raise ValueError(f"time grid: pattern must be positive step sizes, got {k.tolist()}")
         if not T > 0:
             raise ValueError(f"time grid: T must be positive, got {T}")
         reps = int(np.ceil(T / k.sum() + 1e-9)) + 1

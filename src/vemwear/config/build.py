@@ -1,0 +1,328 @@
+"""From a validated configuration to the :class:`Problem`, solver and output options.
+
+Every value is checked once, by the library object it becomes (``Material``, the
+compliance laws, ``TimeGrid``, ``SolverOptions``, the mesh generators and reader,
+``Problem``); each is built inside :func:`~vemwear.config.errors.at`, which turns
+its ``ValueError`` into a :class:`ConfigError` naming the key. What no library object
+checks is checked here: the boundary selectors (each selects an edge, no edge in two
+parts), loads given by expressions being finite, and ``[output] times`` on the grid.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..contact import LinearCompliance, TableCompliance
+from ..mesh import Mesh, MeshError, read_mesh, select_parts
+from ..mesh.registry import family
+from ..simulate import Problem, SolverOptions, TimeGrid
+from ..solvers import resolve_backend
+from ..vem import Material, body_force_vector, traction_vector
+from . import schema as s
+from .errors import ConfigError, at, from_library, from_validation
+from .expr import Expression
+
+__all__ = ["Config", "OutputOptions", "load_config", "parse_config"]
+
+
+@dataclass(frozen=True)
+class OutputOptions:
+    """The ``[output]`` section with its ``times`` resolved to levels of the time grid."""
+
+    times: tuple[float, ...] = ()
+    figures: bool = True
+    vtk: bool = True
+
+
+@dataclass(frozen=True, eq=False)
+class Config:
+    """A validated configuration file.
+
+    Attributes
+    ----------
+    path : Path or None
+        The file it was read from (None for data parsed directly).
+    data : dict
+        The TOML data as written (JSON-friendly; stored in ``summary.json``).
+    title : str
+        The ``title`` key, or the file stem.
+    problem : Problem
+    solver : SolverOptions
+    output : OutputOptions
+    mesh_source : dict
+        ``{"file": absolute path}`` or ``{"generator": name, "function": ..., options}``.
+    model : ConfigFile
+        The validated schema model.
+    """
+
+    path: Path | None
+    data: dict[str, Any]
+    title: str
+    problem: Problem
+    solver: SolverOptions
+    output: OutputOptions
+    mesh_source: dict[str, Any] = field(default_factory=dict)
+    model: s.ConfigFile | None = None
+
+
+# ---------------------------------------------------------------------------- expressions
+class NodalExpression:
+    """``g``, ``mu`` or ``kappa`` as an expression in ``x, y``, called with the (m, 2)
+    contact nodes; ``__name__`` is its text."""
+
+    def __init__(self, expr: Expression) -> None:
+        self.expr, self.__name__ = expr, expr.text
+
+    def __call__(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+        P = np.asarray(points, dtype=float)
+        return self.expr(x=P[..., 0], y=P[..., 1])
+
+
+class FieldExpression:
+    """A load of numbers and expressions in ``x, y, t``: ``f(points, t)`` -> (m, 2)."""
+
+    def __init__(self, parts: Sequence[Expression | float], text: str) -> None:
+        self.parts, self.__name__ = tuple(parts), text
+        self.uses_t = any(isinstance(c, Expression) and "t" in c.names for c in self.parts)
+
+    def __call__(self, x: NDArray[np.float64], t: float) -> NDArray[np.float64]:
+        P = np.asarray(x, dtype=float).reshape(-1, 2)
+        env = {"x": P[:, 0], "y": P[:, 1], "t": np.full(len(P), float(t))}
+        return np.column_stack([_value(c, env) for c in self.parts])
+
+
+class VelocityExpression:
+    """``v_star`` of numbers and expressions in ``t``: ``v(t)`` -> 2-vector."""
+
+    def __init__(self, parts: Sequence[Expression | float], text: str) -> None:
+        self.parts, self.__name__ = tuple(parts), text
+
+    def __call__(self, t: float) -> NDArray[np.float64]:
+        return np.array([float(_value(c, {"t": np.array([float(t)])})[0]) for c in self.parts])
+
+
+def _value(c: Expression | float, env: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
+    return c(**env) if isinstance(c, Expression) else np.full(len(env["t"]), float(c))
+
+
+def _data(v: Any, cls: type | None, raw: Any) -> Any:
+    """A number, table (as a dict) or expression of the schema as the library takes it."""
+    if isinstance(v, Expression):
+        return NodalExpression(v)
+    if isinstance(v, s.Section):
+        return v.model_dump(by_alias=True)
+    if cls and isinstance(v, list) and any(isinstance(c, Expression) for c in v):
+        return cls(v, "[" + ", ".join(repr(c) for c in raw) + "]")
+    return tuple(v) if isinstance(v, list) else v
+
+
+# ---------------------------------------------------------------------------- mesh, boundary
+def _mesh(src: str, m: Any, raw: Mapping[str, Any], base_dir: Path) -> tuple[Mesh, dict[str, Any]]:
+    if isinstance(m, s.MeshFile):
+        path = Path(m.file).expanduser()
+        path = path if path.is_absolute() else base_dir / path
+        if not path.is_file():
+            raise ConfigError(f"{src}: [mesh] file not found: {path}")
+        try:
+            return read_mesh(path), {"file": str(path.resolve())}
+        except MeshError as exc:
+            msg = str(exc).removeprefix(f"{path}: ")
+            raise ConfigError(f"{src}: [mesh] file {m.file!r}: {msg}") from None
+    fam = family(m.generator)
+    options = m.model_dump(exclude_unset=True, exclude={"generator"})
+    with at(src, "[mesh]", raw):
+        try:
+            mesh = fam.generate(**options)
+        except TypeError as exc:  # options that do not go together (e.g. seeds and Lloyd)
+            raise ValueError(f"generator {m.generator!r}: {exc}") from None
+    return mesh, {"generator": m.generator, "function": fam.function.__name__, **options}
+
+
+def _pt(p: NDArray[np.float64]) -> str:
+    return f"({p[0]:.6g}, {p[1]:.6g})"
+
+
+# ---------------------------------------------------------------------------- time, loads
+def _time(src: str, t: Any, raw: Mapping[str, Any]) -> TimeGrid:
+    form = next(k for k in s.TIME_FORMS if k in raw)
+    with at(src, "[time]", raw, key=form):
+        try:
+            if isinstance(t, s.Steps):
+                return TimeGrid.uniform(t.T, t.steps)
+            if isinstance(t, s.Pattern):
+                return TimeGrid.pattern(t.T, t.pattern)
+            if isinstance(t, s.Levels):
+                grid = TimeGrid(np.array(t.levels))
+            else:
+                grid = TimeGrid.from_steps(t.dt)
+        except (MemoryError, OverflowError) as exc:  # far too many levels
+            raise ValueError(f"does not give a valid time grid ({type(exc).__name__})") from None
+    if t.T is not None:
+        if abs(grid.T - t.T) > 1e-9 * max(abs(t.T), 1.0):
+            what = "sums to" if form == "dt" else "ends at"
+            raise ConfigError(f"{src}: [time] {form} {what} {grid.T:.12g}, but T = {t.T:g}")
+        grid = TimeGrid(np.concatenate([grid.t[:-1], [t.T]]))  # end exactly at T
+    return grid
+
+
+def _output_times(src: str, times: list[float] | None, grid: TimeGrid) -> tuple[float, ...]:
+    if times is None:  # the levels nearest T/4, T/2, 3T/4 and T
+        q = np.array([0.25, 0.5, 0.75, 1.0]) * grid.T
+        return tuple(float(grid.t[i]) for i in sorted(set(np.abs(grid.t - q[:, None]).argmin(1))))
+    for i, t in enumerate(times):
+        try:
+            grid.index([t])
+        except ValueError:
+            near = float(grid.t[int(np.abs(grid.t - t).argmin())])
+            raise ConfigError(
+                f"{src}: [output] times[{i}] = {t:g} is not a time level of the grid (T = "
+                f"{grid.T:g}, {grid.n_steps} steps; nearest level {near:.12g})"
+            ) from None
+    return tuple(times)
+
+
+def _check_loads(src: str, pr: Problem) -> None:
+    """Loads given by expressions give finite load vectors at every time level."""
+    for name, assemble in (("f1", body_force_vector), ("f2", traction_vector)):
+        f = getattr(pr, name)
+        if not isinstance(f, FieldExpression):
+            continue
+        with np.errstate(all="ignore"):
+            for n in range(len(pr.time.t)) if f.uses_t else range(1):
+                F = assemble(pr.mesh, f, float(pr.time.t[n])).reshape(-1, 2)
+                bad = np.flatnonzero(~np.all(np.isfinite(F), axis=1))
+                if bad.size:
+                    v = int(bad[0])
+                    when = f" at t = {pr.time.t[n]:g} (level {n})" if f.uses_t else ""
+                    raise ConfigError(
+                        f"{src}: [loads] {name} = {f.__name__} is not finite near vertex {v} "
+                        f"(x = {_pt(pr.mesh.points[v])}){when}"
+                    )
+
+
+# ---------------------------------------------------------------------------- entry points
+def load_config(path: str | os.PathLike[str]) -> Config:
+    """Read and validate a TOML configuration file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.toml`` file; relative mesh file names refer to its directory.
+
+    Returns
+    -------
+    Config
+
+    Raises
+    ------
+    ConfigError
+        If the file is missing, is not valid TOML, or any key is invalid.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"{path}: config file not found")
+    try:
+        with path.open("rb") as fh:
+            data = tomllib.load(fh)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from exc
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read: {exc}") from exc
+    return parse_config(data, source=str(path), base_dir=path.resolve().parent, path=path)
+
+
+def parse_config(
+    data: Mapping[str, Any],
+    source: str = "config",
+    base_dir: str | Path = ".",
+    path: Path | None = None,
+) -> Config:
+    """Validate configuration data (a dict as read by :func:`tomllib.load`).
+
+    Parameters
+    ----------
+    data : mapping
+        The parsed TOML document.
+    source : str
+        Name of the file, the prefix of every error message.
+    base_dir : str or Path
+        Directory that relative mesh file names refer to.
+    path : Path, optional
+        The file, recorded in the returned :class:`Config`.
+
+    Returns
+    -------
+    Config
+
+    Raises
+    ------
+    ConfigError
+        Naming the key path and the problem.
+    """
+    from pydantic import ValidationError
+
+    src = source
+    try:
+        c = s.ConfigFile.model_validate(data)
+    except ValidationError as exc:
+        raise from_validation(exc, src) from None
+    raw: dict[str, Any] = copy.deepcopy(dict(data))  # valid, so plain TOML types only
+    con = raw["contact"]
+    with at(src, "[material]"):
+        material = Material(c.material.lam, c.material.eta)
+    with at(src, "[contact]", key="p"):
+        law = c.contact.p
+        p = (
+            LinearCompliance(law.c)
+            if isinstance(law, s.LinearLaw)
+            else TableCompliance(tuple(law.r), tuple(law.p))
+        )
+    grid = _time(src, c.time, raw["time"])
+    output = OutputOptions(_output_times(src, c.output.times, grid), c.output.figures, c.output.vtk)
+    sol = c.solver
+    with at(src, "[solver]", raw.get("solver", {})):
+        solver = SolverOptions(sol.method, sol.tol, sol.max_iter, sol.backend)
+        resolve_backend(sol.backend)
+
+    mesh, mesh_source = _mesh(src, c.mesh, raw["mesh"], Path(base_dir))
+    if isinstance(c.boundary, s.Boundary):
+        with at(src, "[boundary]", raw["boundary"]):
+            mesh = select_parts(mesh, {k: getattr(c.boundary, k) for k in raw["boundary"]})
+        where = "[boundary]"
+    else:
+        where = f"[mesh] file {c.mesh.file!r}:"
+    loads = raw.get("loads", {})
+    try:
+        problem = Problem(
+            mesh=mesh,
+            material=material,
+            time=grid,
+            f1=_data(c.loads.f1, FieldExpression, loads.get("f1")),
+            f2=_data(c.loads.f2, FieldExpression, loads.get("f2")),
+            p=p,
+            g=_data(c.contact.g, None, None),
+            mu=_data(c.contact.mu, None, None),
+            kappa=_data(c.contact.kappa, None, None),
+            v_star=_data(c.contact.v_star, VelocityExpression, con["v_star"]),
+            stabilization=c.vem.stabilization,
+        )
+    except MeshError as exc:  # the boundary parts (the rest of the mesh is checked)
+        hint = (
+            " in the file (line cells with cell data 'part' = 1, 2, 3, or Gmsh physical groups "
+            "of these names), or add a [boundary] section"
+        )
+        raise ConfigError(f"{src}: {where} {exc}{hint if where != '[boundary]' else ''}") from None
+    except ValueError as exc:
+        raise from_library(exc, src, "[contact]", con) from None
+    _check_loads(src, problem)
+    title = c.title if c.title is not None else Path(source).stem
+    return Config(path, raw, title, problem, solver, output, mesh_source, c)

@@ -1,0 +1,485 @@
+"""The schema of configuration files: pydantic models of every section and key.
+
+The models declare what a file may hold: its sections and keys (an unknown one is an
+error with a suggestion), their types (numbers finite, integers where required),
+defaults (those of the library objects), and the forms a key may take: the
+compliance law by its ``type``, ``[time]`` by which of ``steps``, ``dt``, ``pattern``,
+``levels`` it holds, ``[mesh]`` by its ``generator`` (the families and options of
+:mod:`vemwear.mesh.registry`) or ``file``, a coefficient as a number, an expression
+string (parsed here by :mod:`vemwear.config.expr`) or a table. The physics (signs,
+monotone laws, time grids, ``v* != 0``) is checked by the library objects the values
+become (:mod:`vemwear.config.build`), not here. The field descriptions are the key
+reference of ``docs/config.md`` and of the JSON Schema that ``vemwear schema`` prints.
+"""
+
+import dataclasses
+import difflib
+import types
+from collections.abc import Callable
+from typing import Annotated, Any, Literal, TypeAlias, Union, get_args, get_origin
+
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    PlainValidator,
+    Tag,
+    create_model,
+    model_validator,
+)
+from pydantic.json_schema import SkipJsonSchema
+
+from ..mesh.boundary import SIDES
+from ..mesh.registry import FAMILIES, Family, family
+from ..simulate import Problem, SolverOptions
+from ..solvers import BACKENDS, SOLVERS
+from ..vem import STABILIZATIONS
+from .errors import error, got, show, suggest
+from .expr import ExpressionError, parse_expression
+
+
+def _default(cls: type, name: str) -> Any:
+    """The default of a field of a library dataclass (one place for each default)."""
+    return {f.name: f for f in dataclasses.fields(cls)}[name].default
+
+
+class Section(BaseModel):
+    """A TOML table: known keys only, strict types, finite numbers."""
+
+    model_config = ConfigDict(strict=True, extra="forbid", allow_inf_nan=False, frozen=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _known_keys(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            names = [f.alias or n for n, f in cls.model_fields.items()]
+            for key in data:
+                if key not in names:
+                    raise error(cls._unknown(str(key), names, data))
+        return data
+
+    @classmethod
+    def _unknown(cls, key: str, names: list[str], data: dict[str, Any]) -> str:
+        return f"unknown key {key!r}{suggest(key, names)}"
+
+
+# ---------------------------------------------------------------------------- unions
+def choice(pick: Callable[[Any], str | None], explain: Callable[[Any], str], **forms: Any) -> Any:
+    """A union of ``forms``: ``pick(value)`` names the form to validate; None is the
+    error ``explain(value)``."""
+
+    def fail(value: Any) -> Any:
+        raise error(explain(value))
+
+    members = [Annotated[t, Tag(f"<{k}>")] for k, t in forms.items()]
+    members.append(Annotated[Any, PlainValidator(fail), SkipJsonSchema(), Tag("<error>")])
+    return Annotated[Union[tuple(members)], Discriminator(lambda v: f"<{pick(v) or 'error'}>")]  # noqa: UP007
+
+
+def _toml_kind(v: Any) -> str | None:
+    if isinstance(v, int | float) and not isinstance(v, bool):
+        return "number"
+    kinds: dict[type, str] = {str: "string", list: "array", dict: "table"}
+    return kinds.get(type(v))
+
+
+def by_kind(what: str, **forms: Any) -> Any:
+    """A union of forms ``number``, ``string``, ``array``, ``table`` picked by the TOML type."""
+    return choice(
+        lambda v: _toml_kind(v) if _toml_kind(v) in forms else None,
+        lambda v: f"must be {what}, {got(v)}",
+        **forms,
+    )
+
+
+def expression(*names: str) -> Any:
+    """An expression string in the variables ``names``, parsed into an ``Expression``."""
+
+    def parse(text: str) -> Any:
+        try:
+            return parse_expression(text, names, where="")
+        except ExpressionError as exc:
+            raise error(str(exc)) from None
+
+    return Annotated[str, AfterValidator(parse), Field(title=f"expression in {', '.join(names)}")]
+
+
+def _pytype(tp: Any) -> Any:
+    """A registry option type for pydantic: fixed-size tuples become arrays."""
+    args = get_args(tp)
+    if get_origin(tp) is tuple:
+        if args[-1] is Ellipsis:
+            return list[_pytype(args[0])]  # type: ignore[misc]
+        return Annotated[list[_pytype(args[0])], Field(min_length=len(args), max_length=len(args))]  # type: ignore[misc]
+    if get_origin(tp) in (Union, types.UnionType):
+        forms = {"array" if get_origin(a) is tuple else "number": _pytype(a) for a in args}
+        return by_kind(" or ".join(map(_words, args)), **forms)
+    return tp
+
+
+def _words(tp: Any) -> str:
+    """``'an integer'``, ``'an array of 2 numbers'``, ... (for messages)."""
+    if get_origin(tp) is tuple:
+        return f"an array of {len(get_args(tp))} {_words(get_args(tp)[0]).split()[-1]}s"
+    return {int: "an integer", float: "a number"}.get(tp, str(tp))
+
+
+Vector: TypeAlias = Annotated[list[float], Field(min_length=2, max_length=2)]
+
+
+# ---------------------------------------------------------------------------- contact
+class CoefficientTable(Section):
+    """Piecewise linear along Gamma_C, constant beyond the ends."""
+
+    model_config = ConfigDict(title="table { along, at, values }")
+    along: Literal["x", "y", "s"] = Field(
+        "x", description="coordinate of the contact nodes: x, y or s (arc length along Gamma_C)"
+    )
+    at: list[float] = Field(description="interpolation points, strictly increasing")
+    values: list[float] = Field(description="the values there, as many as `at`")
+
+
+class LinearLaw(Section):
+    """``p(r) = c r_+``."""
+
+    model_config = ConfigDict(title="{ type = 'linear', c }")
+    type: Literal["linear"]
+    c: float = Field(description="stiffness c >= 0 (a stress per length)")
+
+
+class TableLaw(Section):
+    """Piecewise linear through the points ``(r_i, p_i)``, zero for ``r <= 0``, continued
+    with the last slope."""
+
+    model_config = ConfigDict(title="{ type = 'table', r, p }")
+    type: Literal["table"]
+    r: list[float] = Field(description="0 = r_0 < r_1 < ..., at least 2 points")
+    p: list[float] = Field(description="0 = p_0 <= p_1 <= ..., as many as r")
+
+
+class VelocityTable(Section):
+    """``v*(t)`` piecewise linear in time, constant beyond the ends."""
+
+    model_config = ConfigDict(title="table { t, values }")
+    t: list[float] = Field(min_length=1, description="times, strictly increasing")
+    values: list[Vector] = Field(description="velocities [vx, vy] there")
+
+    @model_validator(mode="after")
+    def _increasing(self) -> "VelocityTable":
+        if len(self.t) != len(self.values):
+            n, m = len(self.t), len(self.values)
+            raise error(f": 't' and 'values' must have the same length, got {n} and {m}")
+        bad = [i for i in range(1, len(self.t)) if not self.t[i] > self.t[i - 1]]
+        if bad:
+            raise error(f".t = {show(self.t)} must increase strictly (entry {bad[0]})")
+        return self
+
+
+LAWS: dict[str, type[Section]] = {"linear": LinearLaw, "table": TableLaw}
+
+
+def _law_error(v: Any) -> str:
+    if not isinstance(v, dict):
+        return f"must be a table, {got(v)}"
+    if "type" not in v:
+        return "missing required key 'type' ('linear' or 'table')"
+    t = v["type"]
+    hint = suggest(t, list(LAWS)) if isinstance(t, str) else ""
+    return f".type must be one of {', '.join(map(repr, LAWS))}, got {show(t)}{hint}"
+
+
+def _law_form(v: Any) -> str | None:
+    t = v.get("type") if isinstance(v, dict) else None
+    return t if isinstance(t, str) and t in LAWS else None
+
+
+Law: TypeAlias = choice(_law_form, _law_error, **LAWS)  # type: ignore[valid-type]
+Coefficient: TypeAlias = by_kind(  # type: ignore[valid-type]
+    "a number, an expression string in x, y or a table { along, at, values }",
+    number=float,
+    string=expression("x", "y"),
+    table=CoefficientTable,
+)
+
+
+def components(*names: str) -> Any:
+    """An array of 2 numbers or expression strings in ``names``."""
+    what = f"a number or an expression string in {', '.join(names)}"
+    item = by_kind(what, number=float, string=expression(*names))
+    return Annotated[list[item], Field(min_length=2, max_length=2)]  # type: ignore[valid-type]
+
+
+VStar: TypeAlias = by_kind(  # type: ignore[valid-type]
+    "an array [vx, vy] of numbers or expression strings in t, or a table { t, values }",
+    array=components("t"),
+    table=VelocityTable,
+)
+Load: TypeAlias = components("x", "y", "t")  # type: ignore[valid-type]
+
+
+class Contact(Section):
+    """The contact part Gamma_C: the soft layer and the foundation. All keys are required."""
+
+    p: Law = Field(description="normal compliance law of the soft layer, see below")
+    g: Coefficient = Field(description="thickness of the soft layer, > 0 (u_nu <= g)")
+    mu: Coefficient = Field(description="friction coefficient, >= 0")
+    kappa: Coefficient = Field(description="wear coefficient, >= 0 (wear rate kappa |v*| p)")
+    v_star: VStar = Field(description="velocity of the foundation, non-zero at every level")
+
+
+class Loads(Section):
+    """Body force and traction."""
+
+    f1: Load = Field(_default(Problem, "f1"), description="body force [f1x, f1y]")
+    f2: Load = Field(_default(Problem, "f2"), description="traction [f2x, f2y] on Gamma_N")
+
+
+class Material(Section):
+    """Isotropic linear elasticity, ``sigma = 2 eta eps + lam tr(eps) I``."""
+
+    lam: float = Field(description="Lamé coefficient lambda, > 0")
+    eta: float = Field(description="Lamé coefficient eta (the shear modulus), > 0")
+
+
+class Vem(Section):
+    """The virtual element bilinear form."""
+
+    stabilization: Literal[STABILIZATIONS] = Field(  # type: ignore[valid-type]
+        _default(Problem, "stabilization"),
+        description="weight of the dofi-dofi stabilization: 'paper' (1, as in the paper), "
+        "'eta' (2 eta) or 'trace' (trace of the consistency matrix / n_dof)",
+    )
+
+
+# ---------------------------------------------------------------------------- time
+class Steps(Section):
+    """Uniform."""
+
+    T: float = Field(description="final time, > 0")
+    steps: int = Field(description="number of equal steps, >= 1")
+
+
+class Dt(Section):
+    """Explicit step sizes."""
+
+    T: float | None = Field(None, description="final time; if given, the sum of dt")
+    dt: list[float] = Field(description="the step sizes k_0, k_1, ..., each > 0")
+
+
+class Pattern(Section):
+    """Repeated step sizes."""
+
+    T: float = Field(description="final time, > 0")
+    pattern: list[float] = Field(
+        description="step sizes repeated until T, the last step cut to end at T"
+    )
+
+
+class Levels(Section):
+    """Explicit time levels."""
+
+    T: float | None = Field(None, description="final time; if given, the last level")
+    levels: list[float] = Field(
+        min_length=2, description="the levels 0 = t_0 < t_1 < ... themselves"
+    )
+
+
+TIME_FORMS: dict[str, type[Section]] = {
+    "steps": Steps,
+    "dt": Dt,
+    "pattern": Pattern,
+    "levels": Levels,
+}
+
+
+def _time_form(v: Any) -> str | None:
+    given = [k for k in TIME_FORMS if k in v] if isinstance(v, dict) else []
+    return given[0] if len(given) == 1 else None
+
+
+def _time_error(v: Any) -> str:
+    if not isinstance(v, dict):
+        return f"must be a table, {got(v)}"
+    forms = [f"{k!r} ({(c.__doc__ or '').strip(' .').lower()})" for k, c in TIME_FORMS.items()]
+    given = [k for k in TIME_FORMS if k in v]
+    return f"needs exactly one of {', '.join(forms[:-1])} or {forms[-1]}" + (
+        f"; got {', '.join(given)}" if given else ""
+    )
+
+
+TimeForm: TypeAlias = choice(_time_form, _time_error, **TIME_FORMS)  # type: ignore[valid-type]
+
+
+# ---------------------------------------------------------------------------- solver, output
+class Solver(Section):
+    """The solver of the step problems."""
+
+    method: Literal[tuple(SOLVERS)] = Field(  # type: ignore[valid-type]
+        _default(SolverOptions, "method"),
+        description="'newton': semismooth Newton condensed onto the contact dofs; "
+        "'newton-full': on all dofs; 'uzawa': the paper's Uzawa iteration",
+    )
+    tol: float = Field(
+        _default(SolverOptions, "tol"),
+        description="bound on the scaled KKT residuals of every step, > 0",
+    )
+    max_iter: int | None = Field(
+        None, description="iteration limit per time level, >= 1 (default: the method's own)"
+    )
+    backend: Literal[BACKENDS] = Field(  # type: ignore[valid-type]
+        _default(SolverOptions, "backend"),
+        description="sparse direct solver ('auto': PARDISO if pypardiso is installed, else SciPy)",
+    )
+
+
+class Output(Section):
+    """What ``vemwear run`` writes besides ``result.npz`` and ``summary.json``."""
+
+    times: list[float] | None = Field(
+        None,
+        description="times of the contact-profile figure, each a time level "
+        "(default: the levels nearest T/4, T/2, 3T/4, T)",
+    )
+    figures: bool = Field(True, description="write the PNG figures")
+    vtk: bool = Field(True, description="write the ParaView series solution.pvd")
+
+
+# ---------------------------------------------------------------------------- boundary
+class Segment(Section):
+    """The boundary edges lying on a segment (validated into the pair of its ends)."""
+
+    model_config = ConfigDict(title="segment { from, to }")
+    start: Vector = Field(alias="from", description="one end [x, y]")
+    to: Vector = Field(description="the other end [x, y]")
+
+
+_SIDES = f"a side ({', '.join(map(repr, SIDES))})"
+Ends: TypeAlias = Annotated[Segment, AfterValidator(lambda g: (tuple(g.start), tuple(g.to)))]
+Piece: TypeAlias = by_kind(  # type: ignore[valid-type]
+    f"{_SIDES} or a segment {{ from, to }}", string=Literal[SIDES], table=Ends
+)
+Selector: TypeAlias = by_kind(  # type: ignore[valid-type]
+    f"{_SIDES}, 'rest', a segment {{ from = [x, y], to = [x, y] }} or an array of these",
+    string=Literal[(*SIDES, "rest")],
+    table=Ends,
+    array=Annotated[list[Piece], Field(min_length=1)],  # type: ignore[valid-type]
+)
+
+
+class Boundary(Section):
+    """The boundary parts, selected by the midpoints of the boundary edges."""
+
+    clamped: Selector = Field(title="selector", description="Gamma_D, where u = 0")
+    traction: Selector | None = Field(None, title="selector", description="Gamma_N (traction f2)")
+    contact: Selector = Field(title="selector", description="Gamma_C")
+
+
+BoundaryForm: TypeAlias = by_kind(  # type: ignore[valid-type]
+    "a table or the string 'file'", table=Boundary, string=Literal["file"]
+)
+
+
+# ---------------------------------------------------------------------------- mesh
+class MeshFile(Section):
+    """A mesh file."""
+
+    file: str = Field(
+        description="mesh file (meshio: .vtu, .msh, ...), relative to the configuration file"
+    )
+
+
+class Generated(Section):
+    """A generated mesh; the other keys are the options of the family."""
+
+    @classmethod
+    def _unknown(cls, key: str, names: list[str], data: dict[str, Any]) -> str:
+        return f"unknown key {key!r} for generator {data.get('generator')!r}{suggest(key, names)}"
+
+
+def _family_model(fam: Family) -> type[Generated]:
+    fields: dict[str, Any] = {
+        "generator": (Literal[(fam.name, *fam.aliases)], Field(description=fam.description))
+    }
+    for o in fam.options:
+        tp = _pytype(o.type) if o.default is not None else _pytype(o.type) | None
+        fields[o.name] = (tp, Field(o.default, description=o.help))
+    return create_model(  # type: ignore[no-any-return]
+        f"{fam.name.title()}Mesh", __base__=Generated, __doc__=fam.description, **fields
+    )
+
+
+MESH_FORMS: dict[str, type[Section]] = {n: _family_model(f) for n, f in FAMILIES.items()}
+MESH_FORMS["file"] = MeshFile
+
+
+def _mesh_form(v: Any) -> str | None:
+    if not isinstance(v, dict) or ("file" in v) == ("generator" in v):
+        return None
+    try:
+        return "file" if "file" in v else family(v["generator"]).name
+    except (ValueError, TypeError):
+        return None
+
+
+def _mesh_error(v: Any) -> str:
+    if not isinstance(v, dict):
+        return f"must be a table, {got(v)}"
+    if ("file" in v) == ("generator" in v):
+        return "needs exactly one of 'generator' or 'file'" + (", not both" if "file" in v else "")
+    if not isinstance(v["generator"], str):
+        return f"generator must be a string, {got(v['generator'])}"
+    try:
+        family(v["generator"])
+    except ValueError as exc:
+        return f"generator = {exc}"
+    return "is invalid"  # pragma: no cover - _mesh_form accepted it
+
+
+MeshForm: TypeAlias = choice(_mesh_form, _mesh_error, **MESH_FORMS)  # type: ignore[valid-type]
+
+
+# ---------------------------------------------------------------------------- the file
+class ConfigFile(Section):
+    """A vemwear configuration file (docs/config.md)."""
+
+    model_config = ConfigDict(title="vemwear configuration")
+    title: str | None = Field(
+        None, description="name of the run (default: the file name without .toml)"
+    )
+    mesh: MeshForm = Field(description="a generator and its options, or a file")
+    boundary: BoundaryForm | None = Field(
+        None,
+        description="the boundary parts; with [mesh] file, 'file' or absent means the parts "
+        "stored in the file",
+    )
+    material: Material
+    vem: Vem = Vem.model_construct()
+    loads: Loads = Loads.model_construct()
+    contact: Contact
+    time: TimeForm = Field(description="exactly one of steps, dt, pattern, levels")
+    solver: Solver = Solver.model_construct()
+    output: Output = Output.model_construct()
+
+    @classmethod
+    def _unknown(cls, key: str, names: list[str], data: dict[str, Any]) -> str:
+        close = difflib.get_close_matches(key, names, n=1, cutoff=0.6)
+        sections = [f"[{n}]" for n in names if n != "title"]
+        hint = f"; valid sections: {', '.join(sections)}"
+        if close:
+            hint = f"; did you mean {close[0]!r}?" if close[0] == "title" else ""
+            hint = hint or f"; did you mean [{close[0]}]?"
+        return f"unknown section or key {key!r}{hint}"
+
+    @model_validator(mode="after")
+    def _boundary_parts(self) -> "ConfigFile":
+        if not isinstance(self.mesh, MeshFile):
+            if self.boundary is None:
+                raise error(
+                    "missing required section [boundary] (which sides are clamped, traction "
+                    "and contact)"
+                )
+            if self.boundary == "file":
+                raise error("boundary = 'file' needs [mesh] file (generated meshes have no tags)")
+        return self

@@ -1,0 +1,283 @@
+"""The mesh families, registered once for configuration files and ``vemwear mesh generate``.
+
+Each family is a generator of meshes of a rectangle (Voronoi meshes: of any polygon)
+with a name, the names it is also known by (its function's name), a one-line
+description and the options it takes (name, type, default, one-line help). The
+configuration schema builds the keys of ``[mesh] generator = NAME`` from
+:data:`FAMILIES` (:mod:`vemwear.config.schema`), and ``vemwear mesh generate`` its
+``--cells``, ``--divisions``, ``--seed`` and ``--param`` options. Defaults are those of
+the generator functions' signatures. Option types are Python annotations (tuples for
+fixed-size arrays, ``Literal`` for choices); values are checked by the generators.
+"""
+
+from __future__ import annotations
+
+import difflib
+import inspect
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from numpy.typing import ArrayLike
+
+from .families import distorted_quads, hexagons, nonconvex_mesh, squares_with_hanging_nodes
+from .generate import rectangle_squares, rectangle_triangles
+from .polymesh import Mesh
+from .voronoi import rectangle_domain, voronoi_from_seeds, voronoi_mesh
+
+__all__ = ["FAMILIES", "Family", "Option", "family", "voronoi"]
+
+Pair = tuple[float, float]
+Counts = tuple[int, int]
+Points = tuple[Pair, ...]
+
+
+@dataclass(frozen=True)
+class Option:
+    """A keyword argument of a generator.
+
+    Attributes
+    ----------
+    name : str
+    type : type annotation
+        ``float``, ``int``, ``bool``, ``tuple[float, float]``, ``Literal[...]``, ...
+    help : str
+        One line.
+    default : object
+        The generator's default (None: required, or absent unless given).
+    replaces : tuple of str
+        Options that must not be given together with this one.
+    """
+
+    name: str
+    type: Any
+    help: str
+    default: Any = None
+    replaces: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Family:
+    """A mesh family: its generator and the options it takes.
+
+    Attributes
+    ----------
+    name : str
+        The name in configuration files and on the command line.
+    function : callable
+        The generator, called with options as keyword arguments; returns a :class:`Mesh`.
+    description : str
+        One line.
+    options : tuple of Option
+    aliases : tuple of str
+        Other names accepted in configuration files (the function's name).
+    cells_per_division : int
+        Cells per grid rectangle (1 quadrilaterals, 2 triangles), so that a cell count
+        can be turned into ``divisions``; 0 if the count depends on them otherwise.
+    """
+
+    name: str
+    function: Callable[..., Mesh]
+    description: str
+    options: tuple[Option, ...]
+    aliases: tuple[str, ...] = ()
+    cells_per_division: int = 0
+
+    def option(self, name: str) -> Option | None:
+        """The option called ``name``, or None."""
+        return next((o for o in self.options if o.name == name), None)
+
+    def generate(self, **options: Any) -> Mesh:
+        """The mesh for the given options (the others keep their defaults).
+
+        Raises
+        ------
+        ValueError
+            For an option the family does not take, two options that replace each
+            other, or values the generator rejects (the message names them).
+        """
+        for key in options:
+            opt = self.option(key)
+            if opt is None:
+                names = [o.name for o in self.options]
+                close = difflib.get_close_matches(key, names, n=1)
+                hint = f"did you mean {close[0]!r}? " if close else ""
+                raise ValueError(
+                    f"{key}: family {self.name!r} has no such option; {hint}"
+                    f"its options: {', '.join(names)}"
+                )
+            both = [r for r in opt.replaces if r in options]
+            if both:
+                raise ValueError(f"give either {key!r} or {'/'.join(map(repr, both))}, not both")
+        return self.function(**options)
+
+
+def voronoi(
+    size: Sequence[float] = (2.0, 1.0),
+    n_cells: int = 256,
+    seed: int | None = 0,
+    origin: Sequence[float] = (0.0, 0.0),
+    *,
+    domain: ArrayLike | None = None,
+    seeds: ArrayLike | None = None,
+    **options: Any,
+) -> Mesh:
+    """Voronoi mesh of a rectangle, or of the polygon ``domain``.
+
+    Centroidal with ``n_cells`` cells (:func:`~vemwear.mesh.voronoi.voronoi_mesh`,
+    with ``seed`` and its ``options``), or the cells of the given ``seeds``
+    (:func:`~vemwear.mesh.voronoi.voronoi_from_seeds`).
+    """
+    dom = rectangle_domain(size, origin) if domain is None else domain
+    if seeds is not None:
+        return voronoi_from_seeds(dom, seeds, **options)
+    return voronoi_mesh(dom, n_cells, seed, **options)  # type: ignore[return-value]
+
+
+def _options(*functions: Callable[..., Any], **specs: tuple[Any, ...]) -> tuple[Option, ...]:
+    """Options ``name=(type, help[, replaces])``, defaults from the functions' signatures."""
+    params: dict[str, inspect.Parameter] = {}
+    for fn in reversed(functions):
+        params.update(inspect.signature(fn).parameters)
+    out = []
+    for name, (tp, text, *replaces) in specs.items():
+        d = params[name].default
+        default = None if d is inspect.Parameter.empty else d
+        out.append(Option(name, tp, text, default, tuple(replaces[0]) if replaces else ()))
+    return tuple(out)
+
+
+_SIZE = (Pair, "side lengths [lx, ly] of the rectangle")
+_ORIGIN = (Pair, "lower-left corner [x0, y0] of the rectangle")
+_GRID = {"size": _SIZE, "divisions": (Counts, "cells [nx, ny] in x and y"), "origin": _ORIGIN}
+_SEED = (int, "seed of the random numbers")
+_VORONOI = _options(
+    voronoi,
+    voronoi_mesh,
+    size=_SIZE,
+    n_cells=(int, "number of cells"),
+    seed=_SEED,
+    origin=_ORIGIN,
+    domain=(
+        Points,
+        "corners [[x, y], ...] of a polygon (counter-clockwise) instead of the rectangle",
+        ("size", "origin"),
+    ),
+    seeds=(
+        Points,
+        "the seeds [[x, y], ...] of the cells instead of a centroidal mesh",
+        ("n_cells", "seed"),
+    ),
+    lloyd_iterations=(int, "largest number of Lloyd iterations"),
+    lloyd_tol=(float, "stop when no seed moves by more than this times the cell size"),
+    collapse_tol=(float, "merge vertices closer than this times the cell size"),
+)
+
+#: The mesh families by name.
+FAMILIES: Mapping[str, Family] = {
+    f.name: f
+    for f in (
+        Family(
+            "squares",
+            rectangle_squares,
+            "axis-aligned rectangles, nx * ny cells",
+            _options(rectangle_squares, **_GRID),
+            ("rectangle_squares",),
+            cells_per_division=1,
+        ),
+        Family(
+            "triangles",
+            rectangle_triangles,
+            "each grid rectangle cut into two triangles, 2 * nx * ny cells",
+            _options(
+                rectangle_triangles,
+                **_GRID,
+                diagonal=(
+                    Literal["right", "left", "alternate"],
+                    "diagonals from lower-left to upper-right, from lower-right to "
+                    "upper-left, or both in a checkerboard",
+                ),
+            ),
+            ("rectangle_triangles",),
+            cells_per_division=2,
+        ),
+        Family(
+            "voronoi",
+            voronoi,
+            "centroidal Voronoi polygons, exactly n_cells cells (the paper's mesh B)",
+            _VORONOI,
+            ("rectangle_voronoi", "voronoi_mesh", "voronoi_from_seeds"),
+        ),
+        Family(
+            "distorted",
+            distorted_quads,
+            "grid quadrilaterals with randomly moved interior vertices",
+            _options(
+                distorted_quads,
+                **_GRID,
+                amplitude=(float, "vertices move by up to amplitude * (lx/nx, ly/ny); < 0.25"),
+                seed=_SEED,
+                slide_boundary=(bool, "also move the vertices on the sides, along them"),
+            ),
+            ("distorted_quads",),
+            cells_per_division=1,
+        ),
+        Family(
+            "hexagons",
+            hexagons,
+            "hexagon-dominant (Voronoi cells of a triangular lattice)",
+            _options(
+                hexagons,
+                size=_SIZE,
+                divisions=(int | Counts, "hexagons per row, or [per row, rows]"),
+                origin=_ORIGIN,
+            ),
+        ),
+        Family(
+            "nonconvex",
+            nonconvex_mesh,
+            "chevron-shaped non-convex cells, nx * ny cells",
+            _options(
+                nonconvex_mesh,
+                **_GRID,
+                depth=(float, "height of the chevrons in row heights, in (0, 1)"),
+            ),
+            ("nonconvex_mesh",),
+            cells_per_division=1,
+        ),
+        Family(
+            "hanging",
+            squares_with_hanging_nodes,
+            "squares, every other one split in four (hanging nodes in the others)",
+            _options(
+                squares_with_hanging_nodes,
+                **_GRID,
+                pattern=(
+                    Literal["checkerboard", "random", "bottom", "corner"],
+                    "the split squares: every other one, a random half, the bottom row or "
+                    "the lower-left quarter",
+                ),
+                seed=_SEED,
+            ),
+            ("squares_with_hanging_nodes",),
+        ),
+    )
+}
+_BY_NAME = {n: f for f in FAMILIES.values() for n in (f.name, *f.aliases)}
+
+
+def family(name: str) -> Family:
+    """The family called ``name`` (or one of its aliases).
+
+    Raises
+    ------
+    ValueError
+        For an unknown name; the message suggests the closest one.
+    """
+    if name not in _BY_NAME:
+        close = difflib.get_close_matches(name, list(_BY_NAME), n=1, cutoff=0.6)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise ValueError(
+            f"{name!r} is not a known mesh family; {hint}available: {', '.join(FAMILIES)}"
+        )
+    return _BY_NAME[name]
