@@ -16,7 +16,7 @@ import pytest
 import scipy.sparse.linalg as spla
 
 from vemwear.cli.main import main
-from vemwear.cli.mesh_cmd import generate_mesh, hanging_nodes
+from vemwear.cli.mesh_cmd import generate_mesh
 from vemwear.config import load_config
 from vemwear.mesh import (
     Mesh,
@@ -26,6 +26,7 @@ from vemwear.mesh import (
     refine_along,
     voronoi_mesh,
 )
+from vemwear.mesh.quality import hanging_nodes
 from vemwear.mesh.registry import FAMILIES
 from vemwear.paper import EXAMPLES, ex54, load_example
 from vemwear.simulate import SolverOptions, simulate

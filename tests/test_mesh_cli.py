@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from vemwear.cli.main import main
-from vemwear.cli.mesh_cmd import contact_nodes, generate_mesh, hanging_nodes
+from vemwear.cli.mesh_cmd import contact_nodes, generate_mesh
 from vemwear.mesh import (
     PARTS,
     Mesh,
@@ -25,6 +25,7 @@ from vemwear.mesh import (
     tag_rectangle,
     write_mesh,
 )
+from vemwear.mesh.quality import hanging_nodes
 from vemwear.mesh.registry import FAMILIES
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -38,7 +38,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
-from .output import OutputDirError, atomic_output_dir, check_output_dir, write_outputs
+from ..post.outputs import write_outputs
+from .output import OutputDirError, atomic_output_dir, check_output_dir
 
 if TYPE_CHECKING:
     from ..config import Config

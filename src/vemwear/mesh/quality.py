@@ -301,3 +301,30 @@ def quality_report(
             f"{bad[np.argsort(vertex_ratio[bad])][:10].tolist()}"
         )
     return rep
+
+
+def hanging_nodes(mesh: Mesh, rtol: float = 1e-10) -> NDArray[np.int64]:
+    """Vertices lying on a straight side of a cell (interior angle 180 degrees there).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    rtol : float
+        A vertex is straight when ``|e_in x e_out| <= rtol |e_in| |e_out|`` and the
+        two edges point the same way.
+
+    Returns
+    -------
+    (k,) int array
+        Sorted vertex ids.
+    """
+    found = [np.zeros(0, np.int64)]
+    for _n, (_ids, verts) in mesh.groups.items():
+        X = mesh.points[verts]
+        e_in = X - np.roll(X, 1, axis=1)
+        e_out = np.roll(X, -1, axis=1) - X
+        cross = e_in[..., 0] * e_out[..., 1] - e_in[..., 1] * e_out[..., 0]
+        dot = np.sum(e_in * e_out, axis=-1)
+        scale = np.linalg.norm(e_in, axis=-1) * np.linalg.norm(e_out, axis=-1)
+        found.append(verts[(np.abs(cross) <= rtol * scale) & (dot > 0)])
+    return np.unique(np.concatenate(found))

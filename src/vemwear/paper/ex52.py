@@ -28,9 +28,9 @@ from typing import Any
 
 import numpy as np
 
-from ..cli.output import FIGURE_NAMES, write_outputs
 from ..contact import LinearCompliance
 from ..mesh import Mesh, rectangle_squares, tag_rectangle
+from ..post.outputs import FIGURE_NAMES, write_outputs
 from ..simulate import Problem, Result, SolverOptions, TimeGrid, simulate
 from ..vem import Material
 from . import ExampleRun

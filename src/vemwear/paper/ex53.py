@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from ..cli.output import write_outputs
+from ..post.outputs import write_outputs
 from ..simulate import Problem, Result, SolverOptions, TimeGrid, simulate
 from . import ExampleRun, ex52
 

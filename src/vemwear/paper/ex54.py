@@ -44,9 +44,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
-from ..cli.output import write_outputs
 from ..mesh import Mesh, quality_report, rectangle_voronoi, tag_rectangle
 from ..post.norms import contact_l2_norm
+from ..post.outputs import write_outputs
 from ..post.results import jsonable
 from ..simulate import Problem, Result, SolverOptions, simulate
 from ..vem import Projection
@@ -787,7 +787,7 @@ def run(
         },
     }
     if figures:
-        from ..cli.mesh_cmd import plot_mesh
+        from ..mesh.plot import plot_mesh
 
         t0 = time.perf_counter()
         details["colour_limits"] = _displacement_figures(results, out)

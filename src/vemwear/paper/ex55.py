@@ -425,7 +425,7 @@ def run(
     histories: dict[int, ErrorHistory] = {}
     comparison = Comparison(ref_sol)
     files: list[str] = []
-    from ..cli.output import write_outputs
+    from ..post.outputs import write_outputs
 
     for n in lv:
         name = f"h{n}"

@@ -1,0 +1,86 @@
+"""The standard files of one run: result arrays, summary, figures and the ParaView series."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ..simulate import Result
+
+__all__ = ["FIGURE_NAMES", "write_outputs"]
+
+#: File names of the figures written by :func:`write_outputs`.
+FIGURE_NAMES = {
+    "contact_profiles": "contact_profiles.png",
+    "displacement": "displacement.png",
+    "deformed": "deformed.png",
+    "time_history": "time_history.png",
+}
+
+
+def write_outputs(
+    result: Result,
+    outdir: str | os.PathLike[str],
+    *,
+    times: Sequence[float] = (),
+    figures: bool = True,
+    vtk: bool = True,
+    extra: dict[str, Any] | None = None,
+) -> dict[str, list[str]]:
+    """Write the standard output of one run into an existing directory.
+
+    ``result.npz`` and ``summary.json`` (:func:`vemwear.post.save_result`), the figures
+    (contact profiles at ``times``, displacement and deformed mesh at the final level,
+    time history; see :data:`FIGURE_NAMES`) and the VTK series (``solution.pvd`` and
+    ``solution/*.vtu``).
+
+    Parameters
+    ----------
+    result : Result
+        The finished run.
+    outdir : path
+        Directory to write into (normally the temporary one of
+        :func:`vemwear.cli.output.atomic_output_dir`).
+    times : sequence of float
+        Times of the contact-profile figure (levels of the time grid); default: T.
+    figures, vtk : bool
+        Whether to write the figures and the VTK series.
+    extra : dict, optional
+        Stored under ``inputs.extra`` in ``summary.json``.
+
+    Returns
+    -------
+    dict
+        ``{"data": [...], "figures": [...], "vtk": [...]}``: names relative to ``outdir``.
+    """
+    from .. import post
+
+    out = Path(outdir)
+    written: dict[str, list[str]] = {"data": [], "figures": [], "vtk": []}
+    post.save_result(result, out, extra=extra)
+    written["data"] += ["result.npz", "summary.json"]
+    if figures:
+        _use_agg()
+        last = len(result.t) - 1
+        tl = list(times) if len(times) else [float(result.t[-1])]
+        post.plot_contact_profiles(result, tl, out / FIGURE_NAMES["contact_profiles"])
+        post.plot_displacement(result, last, out / FIGURE_NAMES["displacement"])
+        post.plot_deformed(result, last, out / FIGURE_NAMES["deformed"])
+        post.plot_time_history(result, out / FIGURE_NAMES["time_history"])
+        written["figures"] += list(FIGURE_NAMES.values())
+    if vtk:
+        pvd = post.write_vtk_series(result, out)
+        written["vtk"].append(os.path.relpath(pvd, out))
+    return written
+
+
+def _use_agg() -> None:
+    """Select the non-interactive Agg backend unless the user chose one."""
+    if "MPLBACKEND" in os.environ:
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
