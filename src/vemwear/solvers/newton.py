@@ -26,12 +26,13 @@ from numpy.typing import NDArray
 
 from .backends import factorize, schur_factorize
 from .system import (
+    _TINY,
+    RESIDUAL_NAMES,
     ContactSystem,
     ConvergenceError,
     StepData,
     StepSolution,
     check_converged,
-    condensed_residuals,
     kkt_residuals,
 )
 from .threads import solver_threads
@@ -74,10 +75,10 @@ class _ReducedMatrix:
 
     def matches(self, active, dp, fric) -> bool:
         """Same active set, slopes and (where it matters) friction: O(m) comparisons."""
-        return (
-            np.array_equal(active, self.active)
-            and np.array_equal(dp, self.dp)
-            and (self.fric is None or np.array_equal(fric, self.fric))
+        return bool(
+            (active == self.active).all()
+            and (dp == self.dp).all()
+            and (self.fric is None or (fric == self.fric).all())
         )
 
     def solve(self, rhs: NDArray) -> NDArray:
@@ -125,9 +126,9 @@ class CondensedNewton:
         self.A_norm = self.C_NN * w[None, :]
         self._T = self.C_NT * w[None, :]
         self._H = np.hstack([self.C_NN, self.C_NT])  # one product per iteration
-        self._X = np.zeros((2 * m, 2))
-        tiny = np.finfo(float).tiny
-        self._inv_g_ref = 1.0 / max(float(np.abs(system.g).max()), tiny)
+        self._x = np.zeros(2 * m)  # work arrays of the iteration
+        self._buf = np.zeros(2 * m)
+        self._inv_g_ref = 1.0 / max(float(np.abs(system.g).max()), _TINY)
         self._reduced: _ReducedMatrix | None = None
         self._F: NDArray | None = None
         self._d: NDArray | None = None
@@ -165,9 +166,9 @@ class CondensedNewton:
         :meth:`recover_many` computes it later for several levels at once.
         """
         with self._threads():
-            y, p_rigid, it, R = self._iterate(step, guess)
+            y, p_rigid, it, errors = self._iterate(step, guess)
         s = self.system
-        res = condensed_residuals(s, y, p_rigid, R)
+        res = dict(zip(RESIDUAL_NAMES, errors, strict=True))
         p_rigid = np.maximum(p_rigid, 0.0)
         p_soft = s.p(y - step.w)
         u = None
@@ -181,7 +182,14 @@ class CondensedNewton:
         )
 
     def _iterate(self, step: StepData, guess: StepSolution | None):
-        """The Newton iterations; returns y, p_rigid, the iteration count and R."""
+        """The Newton iterations; returns y, p_rigid, the iteration count and the three
+        condensed residuals of the last iterate.
+
+        Each iteration solves ``J11 dy + C_NN W dp_rigid = -R`` with ``dy = g - y`` on
+        the active and ``dp_rigid = -p_rigid`` on the inactive set (the linearization of
+        R, ``J11 = I + M D``); when the active set is the same as at the previous
+        iterate, these prescribed parts are zero and the right-hand side is ``-R``.
+        """
         s, opt = self.system, self.options
         d = self._normal_displacement_of_load(step.F)
         g, c_ncp, wear, fric, law = s.g, s.c_ncp, step.w, step.fric, s.p
@@ -189,7 +197,7 @@ class CondensedNewton:
             y, p_rigid = np.array(guess.u_nu, copy=True), np.array(guess.p_rigid, copy=True)
         else:
             y, p_rigid = np.minimum(d, g), np.zeros(s.m)
-        m, w, H, X = s.m, s.weights, self._H, self._X
+        m, w, H, x, buf = s.m, s.weights, self._H, self._x, self._buf
         wf = w * fric
         inv_g = self._inv_g_ref
         stop = 0.1 * opt.tol
@@ -198,37 +206,51 @@ class CondensedNewton:
             r = y - wear
             p_soft = law(r)
             # R = y - d + C_NN W (p_soft + p_rigid) + C_NT W Fric p_soft
-            np.multiply(w, p_soft + p_rigid, out=X[:m, 0])
-            np.multiply(wf, p_soft, out=X[m:, 0])
+            np.multiply(w, p_soft + p_rigid, out=x[:m])
+            np.multiply(wf, p_soft, out=x[m:])
+            R = H @ x
+            R += y
+            R -= d
+            errors = _condensed_errors(y, p_rigid, R, g, inv_g, buf)
+            if max(errors) <= stop or it == opt.max_iter:
+                return y, p_rigid, it, errors
+            it += 1
             active = p_rigid + c_ncp * (y - g) > 0.0
             dp = law.derivative(r)
-            # right-hand side of the reduced system: d - g_A - H (z), z = p_soft + p'(g_A - y)
-            g_A = np.where(active, g, 0.0)
-            z = p_soft + dp * (g_A - y)
-            np.multiply(w, z, out=X[:m, 1])
-            np.multiply(wf, z, out=X[m:, 1])
-            HX = H @ X
-            R = y - d + HX[:, 0]
-            if _condensed_error(y, p_rigid, R, g, inv_g) <= stop or it == opt.max_iter:
-                return y, p_rigid, it, R
-            it += 1
             red = self._reduced
             if red is None or not red.matches(active, dp, fric):
                 red = self._reduced = _ReducedMatrix(self.A_norm, self._T, active, dp, fric)
-            x = red.solve(d - g_A - HX[:, 1])
-            y = np.where(active, g, x)
-            p_rigid = np.where(active, x, 0.0)
+            dy_A = np.where(active, g - y, 0.0)
+            dp_I = np.where(active, 0.0, p_rigid)
+            rhs = -R
+            if dy_A.any() or dp_I.any():
+                # rhs -= J11 dy_A + C_NN W (-p_rigid_I)
+                t = dp * dy_A
+                np.multiply(w, t - dp_I, out=x[:m])
+                np.multiply(wf, t, out=x[m:])
+                rhs -= dy_A
+                rhs -= H @ x
+            sol = red.solve(rhs)
+            y = np.where(active, g, y + sol)
+            p_rigid = np.where(active, p_rigid + sol, 0.0)
 
 
-def _condensed_error(y, p_rigid, R, g, inv_g) -> float:
-    """The largest of the three condensed residuals (:func:`condensed_residuals`)."""
-    p_ref = max(float(np.abs(p_rigid).max()), np.finfo(float).tiny)
-    gap = (g - y) * inv_g
-    return max(
-        float(np.abs(R).max()) * inv_g,
-        -float(gap.min()),
-        float(np.abs(np.minimum(p_rigid / p_ref, gap)).max()),
-    )
+def _condensed_errors(y, p_rigid, R, g, inv_g, buf) -> tuple[float, float, float]:
+    """The three condensed residuals of :func:`condensed_residuals`, as a tuple.
+
+    The feasibility residual is never above the complementarity residual (where
+    ``y > g``, ``|min(p_rigid / p_ref, (g - y) / g_ref)| >= (y - g) / g_ref``), so the
+    largest of the three is the largest entry of ``buf = |[R / g_ref, ncp]|``; the
+    feasibility value is read from the same numbers.
+    """
+    m = len(y)
+    p_ref = max(float(p_rigid.max()), -float(p_rigid.min())) or _TINY
+    np.multiply(R, inv_g, out=buf[:m])
+    gap = g - y
+    gap *= inv_g
+    np.minimum(p_rigid / p_ref, gap, out=buf[m:])
+    np.abs(buf, out=buf)
+    return float(buf[:m].max()), max(0.0, -float(gap.min())), float(buf[m:].max())
 
 
 class FullNewton:
