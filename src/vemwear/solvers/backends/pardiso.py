@@ -1,4 +1,8 @@
-"""Intel MKL PARDISO through its C routine ``pardiso`` (the library that pypardiso loads).
+"""Intel MKL PARDISO through its C routine ``pardiso`` in MKL's single dynamic library.
+
+``mkl_rt`` is looked up where the ``mkl`` wheel (a dependency of ``pypardiso``) puts
+it, ``$PYPARDISO_MKL_RT`` first; pypardiso's own search (which walks the whole
+installation) is only the last resort.
 
 :class:`PardisoSchur` factorizes the SPD stiffness (``mtype = 2``, Cholesky) with the
 Schur option ``iparm[35] = 2``: the rows marked in ``perm`` (the contact dofs) are
@@ -19,6 +23,10 @@ garbage collected.
 from __future__ import annotations
 
 import ctypes
+import glob
+import os
+import site
+import sys
 import time
 import weakref
 from functools import cache
@@ -58,13 +66,28 @@ def available() -> bool:
     return True
 
 
+def _mkl_rt() -> Any:
+    """MKL's runtime library, loaded with ctypes."""
+    env = os.environ.get("PYPARDISO_MKL_RT")
+    candidates = [env] if env else []
+    for root in dict.fromkeys((sys.prefix, sys.base_prefix, site.USER_BASE or "")):
+        if root:
+            candidates += sorted(glob.glob(os.path.join(root, "lib", "libmkl_rt.so*")))
+            candidates += sorted(glob.glob(os.path.join(root, "Library", "bin", "mkl_rt*.dll")))
+    for path in candidates:
+        try:
+            return ctypes.CDLL(path)
+        except OSError:
+            continue
+    import pypardiso  # searches everywhere; raises when MKL is missing
+
+    return pypardiso.ps.libmkl
+
+
 @cache
 def _routine() -> Any:
-    """MKL's ``pardiso`` C routine, located by pypardiso, with its argument types."""
-    import pypardiso
-
-    lib = pypardiso.ps.libmkl
-    f = lib.pardiso
+    """MKL's ``pardiso`` C routine with its argument types."""
+    f = _mkl_rt().pardiso
     i32p = ctypes.POINTER(ctypes.c_int32)
     f.argtypes = [
         ctypes.POINTER(ctypes.c_int64),  # pt
