@@ -112,6 +112,15 @@ def test_factorize_solves_vectors_and_blocks(small_problem, backend):
 
 
 @needs_pardiso
+def test_pardiso_full_and_partial_solves_agree(small_problem):
+    s = small_problem.discrete.system
+    f = schur_factorize(s.K, s.contact_dofs.ravel(), s.dof_points, "pardiso")
+    B = np.random.default_rng(2).normal(size=(s.n_free, 4))
+    assert rel(f.solve_partial(B), f.solve(B)) <= 1e-12
+    assert rel(s.K @ f.solve_partial(B), B) <= 1e-12
+
+
+@needs_pardiso
 def test_pardiso_rejects_a_matrix_that_is_not_spd(small_problem):
     s = small_problem.discrete.system
     with pytest.raises(RuntimeError, match="not positive definite"):

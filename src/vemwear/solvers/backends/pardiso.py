@@ -8,10 +8,11 @@ installation) is only the last resort.
 Schur option ``iparm[35] = 2``: the rows marked in ``perm`` (the contact dofs) are
 left out of the factorization, which returns their Schur complement
 ``S = K_cc - K_ci K_ii^{-1} K_ic`` as a dense matrix and keeps the factors of
-``K_ii``. A solve with ``K`` is then a forward substitution (phase 331), whose
-contact rows hold ``b_c - K_ci K_ii^{-1} b_i``, the Schur solve ``x_c = S^{-1}(...)``
-with the dense ``S_inv`` computed once, and a backward substitution (phase 333) that
-gives ``x_i``. No factor of the whole matrix is ever formed.
+``K_ii``. Block solves with ``K`` use the same factorization (phase 33, which
+completes the elimination with the Schur block; the partial phases 331/333 with the
+dense ``S_inv`` in between give the same result but were 1.3-1.8 times slower in
+``benchmarks/bench_backends.py``). No factor of the whole matrix is formed in the
+factorization phase.
 
 :class:`PardisoFactor` factorizes any square matrix (real nonsymmetric, ``mtype =
 11``, or SPD, ``mtype = 2``) for the full-space Newton path and Uzawa.
@@ -250,8 +251,17 @@ class PardisoSchur:
             self.timings["schur"] = time.perf_counter() - tick
 
     def solve(self, b: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``K^{-1} b`` for a vector or an (n, k) block: forward substitution, the Schur
-        solve with ``S_inv``, backward substitution."""
+        """``K^{-1} b`` for a vector or an (n, k) block of right-hand sides."""
+        B, k = _block(b, self.n)
+        X = np.zeros_like(B)
+        with solver_threads():
+            self._h(33, B, X, k)
+        return X[:, 0] if np.ndim(b) == 1 else X
+
+    def solve_partial(self, b: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The same solve by the partial phases: forward substitution (331), whose
+        contact rows hold ``b_c - K_ci K_ii^{-1} b_i``, ``x_c = S_inv (...)``, backward
+        substitution (333)."""
         B, k = _block(b, self.n)
         Y = np.zeros_like(B)
         X = np.zeros_like(B)
