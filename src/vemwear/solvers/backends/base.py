@@ -19,6 +19,8 @@ import numpy as np
 import scipy.linalg as sla
 from numpy.typing import NDArray
 
+from ..threads import solver_threads
+
 
 class Factorization(Protocol):
     """A sparse factorization of a square matrix."""
@@ -60,14 +62,16 @@ def compliance_from_schur(S: NDArray[np.float64]) -> NDArray[np.float64]:
     """
     S = np.array(S, dtype=float, order="F", copy=True)
     potrf, potri = sla.get_lapack_funcs(("potrf", "potri"), (S,))
-    L, info = potrf(S, lower=True, overwrite_a=True, clean=False)
+    with solver_threads():
+        L, info = potrf(S, lower=True, overwrite_a=True, clean=False)
+        if info == 0:
+            inv, info2 = potri(L, lower=True, overwrite_c=True)
     if info != 0:
         raise np.linalg.LinAlgError(
             f"the Schur complement on the contact dofs is not positive definite "
             f"(leading minor {info}): the stiffness is not SPD"
         )
-    inv, info = potri(L, lower=True, overwrite_c=True)
-    if info != 0:  # pragma: no cover - potrf succeeded, so the factor is regular
-        raise np.linalg.LinAlgError(f"inverting the Schur complement failed (info {info})")
+    if info2 != 0:  # pragma: no cover - potrf succeeded, so the factor is regular
+        raise np.linalg.LinAlgError(f"inverting the Schur complement failed (info {info2})")
     inv = np.tril(inv)
     return inv + np.tril(inv, -1).T
