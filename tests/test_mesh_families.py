@@ -144,7 +144,7 @@ def test_voronoi_return_seeds_and_from_seeds():
 
 def test_voronoi_interior_centroids_from_triangles_match_the_polygons():
     """The fan-free centroids of the Lloyd iterations equal those of the ordered regions."""
-    from vemwear.mesh import voronoi as vor
+    from vemwear.mesh import voronoi_diagram as vor
 
     rng = np.random.default_rng(4)
     seeds = rng.random((400, 2)) * [2.0, 1.0]
