@@ -161,3 +161,20 @@ def test_forced_scipy_fallback_runs_the_condensed_solver(small_problem, no_pardi
 def test_backend_names_are_consistent():
     assert set(backends.PREFERENCE) | {"auto"} == set(BACKENDS)
     assert set(INSTALLED) <= set(backends.PREFERENCE)
+
+
+def test_solver_threads_limit_the_openblas_pools(monkeypatch):
+    from threadpoolctl import threadpool_info
+
+    from vemwear.solvers.threads import solver_threads
+
+    def openblas_threads() -> list[int]:
+        return [d["num_threads"] for d in threadpool_info() if d["internal_api"] == "openblas"]
+
+    before = openblas_threads()
+    with solver_threads():
+        assert all(t == 1 for t in openblas_threads())
+    assert openblas_threads() == before
+    monkeypatch.setenv("VEMWEAR_BLAS_THREADS", "keep")
+    with solver_threads():
+        assert openblas_threads() == before

@@ -32,20 +32,30 @@ def _controller() -> Any:
     return ThreadpoolController()
 
 
+@cache
+def _openblas() -> Any:
+    """The controller of the loaded OpenBLAS libraries only (NumPy's and SciPy's)."""
+    ctl = _controller()
+    return None if ctl is None else ctl.select(internal_api="openblas")
+
+
 def _refresh() -> Any:
-    """The controller, rebuilt when a BLAS library was loaded after it (MKL by PARDISO)."""
-    _controller.cache_clear()
-    return _controller()
+    """A controller that also sees the libraries loaded since (MKL by PARDISO)."""
+    try:
+        from threadpoolctl import ThreadpoolController
+    except ImportError:  # pragma: no cover - threadpoolctl is a dependency
+        return None
+    return ThreadpoolController()
 
 
 @contextlib.contextmanager
 def solver_threads() -> Iterator[None]:
     """Run the enclosed kernels with the OpenBLAS pools at one thread each."""
-    ctl = _controller() if os.environ.get("VEMWEAR_BLAS_THREADS") != "keep" else None
+    ctl = _openblas() if os.environ.get("VEMWEAR_BLAS_THREADS") != "keep" else None
     if ctl is None:
         yield
         return
-    with ctl.limit(limits={"openblas": 1}):
+    with ctl.limit(limits=1):
         yield
 
 
