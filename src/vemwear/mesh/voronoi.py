@@ -227,9 +227,20 @@ def _invalid_polygons(
     return out
 
 
-def _snap_boundary(points: FloatArray, mesh: Mesh, dom: FloatArray) -> FloatArray:
-    """Project vertices of boundary edges exactly onto the nearest domain side."""
-    v = np.unique(mesh.boundary_edges)
+def _boundary_vertices(off: IntArray, cv: IntArray, n_points: int) -> IntArray:
+    """Vertices of the edges that only one cell has (their reverse is in no cell)."""
+    nxt = np.arange(1, len(cv) + 1)
+    nxt[off[1:] - 1] = off[:-1]
+    a, b = cv, cv[nxt]
+    fwd = np.sort(a * n_points + b)
+    rev = b * n_points + a
+    pos = np.minimum(np.searchsorted(fwd, rev), len(fwd) - 1)
+    lone = fwd[pos] != rev
+    return np.unique(np.concatenate([a[lone], b[lone]]))
+
+
+def _snap_boundary(points: FloatArray, v: IntArray, dom: FloatArray) -> FloatArray:
+    """Project the boundary vertices ``v`` exactly onto the nearest domain side."""
     s, tt, _dist = _nearest_sides(points[v], dom)
     a, b = dom, np.roll(dom, -1, axis=0)
     best = a[s] + tt[:, None] * (b - a)[s]
@@ -247,8 +258,7 @@ def _snap_boundary(points: FloatArray, mesh: Mesh, dom: FloatArray) -> FloatArra
 
 def _build(dg: _Diagram, dom: FloatArray, collapse: float, validate: bool) -> Mesh:
     P, off, cv = _assemble(dg, dom, collapse)
-    mesh = Mesh(P, off, cv)
-    mesh = Mesh(_snap_boundary(P, mesh, dom), off, cv)
+    mesh = Mesh(_snap_boundary(P, _boundary_vertices(off, cv, len(P)), dom), off, cv)
     if validate:
         check_vertices(mesh)
         check_cells(mesh)
@@ -286,6 +296,16 @@ def _initial_seeds(dom: FloatArray, n: int, rng: np.random.Generator) -> FloatAr
             ok[ok] = point_in_domain(x[ok], dom)
         return ok
 
+    if box:  # point p is inside for spacings below a_max(p): take the n-th largest
+        ext = hi - lo
+        with np.errstate(divide="ignore"):
+            a_max = np.where(np.all(unit > 0, axis=1), np.min(ext / unit, axis=1), 0.0)
+        order = np.argsort(-a_max, kind="stable")
+        if a_max[order[n - 1]] > 0 and (n == len(order) or a_max[order[n]] < a_max[order[n - 1]]):
+            a = 0.5 * (a_max[order[n - 1]] + (a_max[order[n]] if n < len(order) else 0.0))
+            a = min(a, a_max[order[n - 1]] * (1 - 1e-12))
+            pts = lo + a * unit[np.sort(order[:n])]
+            return pts[_morton_order(pts)]
     lo_a, hi_a = a_min, 2.0 * a0  # many points at lo_a, few at hi_a
     best = inside(lo_a)
     if best.sum() < n:  # pragma: no cover - the lattice covers the box at half the spacing
