@@ -1,66 +1,129 @@
-"""Sparse direct solvers on the stiffness of Example 5.5's meshes (k = h, squares).
+"""Sparse backends on the stiffness of Example 5.5's meshes (k = h, squares).
 
-For each 1/h: unknowns, factorization time and time of one back-substitution for
+For each 1/h and each installed backend: the factorization with the Schur
+complement on the contact dofs (ordering + factorization + Schur block + its
+inverse), and the time per right-hand side of a block solve with ``--rhs``
+columns (the recovery of the displacement). Every measurement is repeated
+``--repeat`` times, interleaved (backend after backend, then again), and reported
+as min / median / max.
 
-* SuperLU with SciPy's default ordering (the plain factorization),
-* SuperLU with nested dissection and the contact dofs last (the condensed path,
-  including the Schur complement it gives),
-* PARDISO through pypardiso (the ``fast`` extra), if installed.
+The floor, on the same matrix in the same run:
+
+* ``floor pardiso``: a plain SPD factorization by PARDISO (no Schur block) and its
+  block solve (phase 33), if PARDISO is installed;
+* ``floor superlu``: SciPy's SuperLU with its default ordering, factorization and
+  block solve (the plain path; skipped above ``--superlu-max`` unknowns).
+
+MUMPS and CHOLMOD are not measured: no binding of theirs installs from a wheel
+with NumPy 2 on Python 3.11.
 
 Usage::
 
-    python benchmarks/bench_backends.py --n 32 64 128 256
+    python benchmarks/bench_backends.py --n 64 128 256 --repeat 5
+
+Timings on a loaded machine are only indicative; run on a quiet one for figures.
 """
 
 from __future__ import annotations
 
 import argparse
+import statistics
 import time
-
-import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
+from collections import defaultdict
+from collections.abc import Callable
 
 
-def _timed(f, *args, repeat: int = 1):
-    """(result of the last call, mean wall time of a call)."""
-    t = time.perf_counter()
-    for _ in range(repeat):
-        out = f(*args)
-    return out, (time.perf_counter() - t) / repeat
+def _stats(v: list[float]) -> str:
+    return f"{min(v):8.3f} {statistics.median(v):8.3f} {max(v):8.3f}"
+
+
+def _cases(K, contact, points, rhs: int, superlu_max: int) -> dict[str, Callable[[], tuple]]:
+    """Callables returning (factorization seconds, seconds per right-hand side)."""
+    import numpy as np
+    import scipy.sparse.linalg as spla
+
+    from vemwear.solvers.backends import available_backends, schur_factorize
+    from vemwear.solvers.threads import solver_threads
+
+    B = np.random.default_rng(0).normal(size=(K.shape[0], rhs))
+    cases: dict[str, Callable[[], tuple]] = {}
+
+    def schur(backend: str) -> Callable[[], tuple]:
+        def run() -> tuple:
+            t = time.perf_counter()
+            f = schur_factorize(K, contact, points, backend)
+            tf = time.perf_counter() - t
+            t = time.perf_counter()
+            f.solve(B)
+            return tf, (time.perf_counter() - t) / rhs
+
+        return run
+
+    for b in available_backends():
+        cases[f"{b} + Schur"] = schur(b)
+    if "pardiso" in available_backends():
+        from vemwear.solvers.backends.pardiso import PardisoFactor
+
+        def floor_pardiso() -> tuple:
+            t = time.perf_counter()
+            f = PardisoFactor(K, spd=True)
+            tf = time.perf_counter() - t
+            t = time.perf_counter()
+            f.solve(B)
+            return tf, (time.perf_counter() - t) / rhs
+
+        cases["floor pardiso"] = floor_pardiso
+    if K.shape[0] <= superlu_max:
+        Kc = K.tocsc()
+
+        def floor_superlu() -> tuple:
+            with solver_threads():
+                t = time.perf_counter()
+                lu = spla.splu(Kc)
+                tf = time.perf_counter() - t
+                t = time.perf_counter()
+                lu.solve(B)
+            return tf, (time.perf_counter() - t) / rhs
+
+        cases["floor superlu"] = floor_superlu
+    return cases
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    ap.add_argument("--n", type=int, nargs="+", default=[32, 64, 128, 256])
+    ap.add_argument("--n", type=int, nargs="+", default=[64, 128, 256], help="values of 1/h")
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--rhs", type=int, default=32, help="columns of the block solve")
+    ap.add_argument("--superlu-max", type=int, default=300_000)
     a = ap.parse_args(argv)
     from vemwear.paper import ex52
-    from vemwear.solvers.linalg import PardisoFactor, SchurFactor, _have_pardiso
+    from vemwear.solvers.threads import blas_info
 
     print(
-        f"{'1/h':>5} {'unknowns':>9} | {'superlu factor':>14} {'solve':>7} | "
-        f"{'ND+Schur factor':>15} {'solve':>7} | {'pardiso factor':>14} {'solve':>7}"
+        f"{'1/h':>5} {'unknowns':>9} {'contact':>7}  {'case':<16}"
+        f" {'factor+Schur [s]: min   median      max':>40}"
+        f" {'solve/rhs [ms]: min median      max':>37}"
     )
     for n in a.n:
         pr = ex52.problem(0.2, 2.0, divisions=(2 * n, n), steps=1)
         s = pr.discrete.system
-        K = s.K.tocsc()
-        b = np.ones(K.shape[0])
-        lu, t_lu = _timed(spla.splu, K)
-        _, s_lu = _timed(lu.solve, b, repeat=3)
-        nd, t_nd = _timed(SchurFactor, s.K, s.contact_dofs.ravel(), s.dof_points)
-        _, s_nd = _timed(nd.solve, b, repeat=3)
-        if _have_pardiso():
-            pa_f, t_pa = _timed(PardisoFactor, sp.csr_matrix(K))
-            _, s_pa = _timed(pa_f.solve, b, repeat=3)
-            pa = f"{t_pa:14.2f} {s_pa:7.3f}"
-        else:
-            pa = f"{'not installed':>14} {'':>7}"
-        print(
-            f"{n:5d} {K.shape[0]:9d} | {t_lu:14.2f} {s_lu:7.3f} | {t_nd:15.2f} {s_nd:7.3f} | {pa}"
-        )
+        cases = _cases(s.K, s.contact_dofs.ravel(), s.dof_points, a.rhs, a.superlu_max)
+        fac: dict[str, list[float]] = defaultdict(list)
+        sol: dict[str, list[float]] = defaultdict(list)
+        for _ in range(a.repeat):  # interleaved: every case once per round
+            for name, run in cases.items():
+                tf, ts = run()
+                fac[name].append(tf)
+                sol[name].append(1e3 * ts)
+        for name in cases:
+            print(
+                f"{n:5d} {s.n_free:9d} {s.contact_dofs.size:7d}  {name:<16}"
+                f" {_stats(fac[name]):>40} {_stats(sol[name]):>37}"
+            )
+    libs = ", ".join(f"{d['internal_api']}:{d['num_threads']}" for d in blas_info())
+    print(f"BLAS pools (threads outside the solver's kernels): {libs}")
     return 0
 
 

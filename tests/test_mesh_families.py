@@ -142,6 +142,45 @@ def test_voronoi_return_seeds_and_from_seeds():
         assert np.all(e[:, 0] * r[:, 1] - e[:, 1] * r[:, 0] >= -1e-12)
 
 
+def test_voronoi_interior_centroids_from_triangles_match_the_polygons():
+    """The fan-free centroids of the Lloyd iterations equal those of the ordered regions."""
+    from vemwear.mesh import voronoi_diagram as vor
+
+    rng = np.random.default_rng(4)
+    seeds = rng.random((400, 2)) * [2.0, 1.0]
+    lo, hi = RECT.min(axis=0), RECT.max(axis=0)
+    tr = vor._triangulate(seeds, 0.5 * (lo + hi), 4.0 * float(np.linalg.norm(hi - lo)))
+    fans = vor._fans(tr)
+    ref = vor._area_centroid(fans.offsets, fans.centres[fans.tri])[1]
+    fast = vor._interior_centroids(tr)
+    assert np.abs(fast - ref).max() <= 1e-9 * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("domain", [RECT, LSHAPE], ids=["rectangle", "l-shape"])
+def test_voronoi_initial_lattice_has_the_exact_count(domain):
+    from vemwear.mesh import voronoi as vor
+
+    for n in (1, 7, 100, 1234):
+        pts = vor._initial_seeds(domain, n, np.random.default_rng(n))
+        assert len(pts) == n and np.all(vor.point_in_domain(pts, domain))
+        assert len(np.unique(pts, axis=0)) == n
+
+
+def test_voronoi_default_iterations_keep_quality_on_many_cells():
+    """The automatic iteration count (fewer Lloyd iterations for many cells)."""
+    rep = quality_report(voronoi_mesh(RECT, 20_000, seed=3))
+    assert rep.ok and rep.gamma1 > 0.2 and rep.gamma2 > 0.02
+
+
+def test_importing_the_mesh_package_does_not_load_scipy_stats():
+    import subprocess
+    import sys
+
+    code = "import sys, vemwear.mesh; print('scipy.stats' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
 def test_voronoi_input_errors():
     with pytest.raises(ValueError, match="counter-clockwise"):
         voronoi_mesh(RECT[::-1], 10)

@@ -193,3 +193,22 @@ def test_time_grids():
     for bad in ([0.0, 0.0, 1.0], [0.1, 0.5], [0.0, 0.5, 0.4]):
         with pytest.raises(ValueError, match="time grid"):
             TimeGrid(np.array(bad))
+
+
+def test_condensed_certificate_matches_its_definition(small):
+    """The iteration's cheap certificate gives the residuals of ``condensed_residuals``."""
+    from vemwear.solvers.newton import _condensed_errors
+    from vemwear.solvers.system import RESIDUAL_NAMES, condensed_residuals
+
+    pr, _ = small
+    s = pr.discrete.system
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        y = s.g + rng.normal(scale=0.05, size=s.m)
+        p_rigid = rng.normal(size=s.m)
+        R = rng.normal(scale=1e-3, size=s.m)
+        inv_g = 1.0 / np.abs(s.g).max()
+        fast = _condensed_errors(y, p_rigid, R, s.g, inv_g, np.empty(2 * s.m))
+        ref = condensed_residuals(s, y, p_rigid, R)
+        assert np.allclose(fast, [ref[k] for k in RESIDUAL_NAMES], rtol=1e-14, atol=0)
+        assert ref["feasibility"] <= ref["complementarity"]

@@ -1,6 +1,12 @@
 """Solvers of the step problem: condensed and full semismooth Newton, Uzawa."""
 
-from .linalg import BACKENDS, factorize, resolve_backend
+from .backends import (
+    BACKENDS,
+    available_backends,
+    factorize,
+    resolve_backend,
+    schur_factorize,
+)
 from .newton import CondensedNewton, FullNewton, NewtonOptions
 from .system import (
     ContactSystem,
@@ -25,7 +31,9 @@ __all__ = [
     "StepSolution",
     "Uzawa",
     "UzawaOptions",
+    "available_backends",
     "factorize",
     "kkt_residuals",
     "resolve_backend",
+    "schur_factorize",
 ]

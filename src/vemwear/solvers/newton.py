@@ -16,6 +16,7 @@ nodes into an active set (``N u = g``) and an inactive set (``p_rigid = 0``), an
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,54 +24,84 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from .linalg import SchurFactor, factorize
+from .backends import factorize, schur_factorize
 from .system import (
+    _TINY,
+    RESIDUAL_NAMES,
     ContactSystem,
     ConvergenceError,
     StepData,
     StepSolution,
     check_converged,
-    condensed_residuals,
     kkt_residuals,
 )
+from .threads import solver_threads
 
 
 @dataclass(frozen=True)
 class NewtonOptions:
-    """Tolerance on the scaled KKT residuals, iteration limit, linear-algebra backend
-    (the condensed solver always uses SuperLU, whose factors give the Schur complement)."""
+    """Tolerance on the scaled KKT residuals, iteration limit, sparse backend
+    (:func:`.backends.resolve_backend`: ``"auto"`` takes the fastest installed)."""
 
     tol: float = 1e-10
     max_iter: int = 100
     backend: str = "auto"
 
 
-def _reduced_matrix(J11, J12, active):
-    """Columns of the Newton system for the unknowns dy_I (inactive) and dlam_A (active)."""
-    return np.hstack([J11[:, ~active], J12[:, active]])
+class _ReducedMatrix:
+    """The LU factors of the reduced Newton matrix for one active set and slope vector.
 
-
-def _active_set_step(lu, J11, J12, y, p_rigid, R, active, g):
-    """Solve the Newton system for (dy, dp_rigid) with dy_A = g_A - y_A and dlam_I = -lam_I.
-
-    ``J11 dy + J12 dp_rigid = -R`` (m equations); the unknowns are dy_I and dlam_A, and
-    ``lu`` factorizes their columns (:func:`_reduced_matrix`).
+    With ``M = C_NN W + C_NT W Fric`` the Newton system for the new iterate reads
+    ``(I + M D) y + C_NN W p_rigid = rhs`` with ``D = diag(p')``; on the active set
+    ``y = g``, on the inactive set ``p_rigid = 0``. The unknowns left, ``y`` on the
+    inactive and ``p_rigid`` on the active nodes, share one index per node, so the
+    matrix is ``M D`` with the active columns replaced by those of ``C_NN W`` and ones
+    added on the inactive diagonal. It is factorized once per (active set, slopes,
+    friction where slopes are nonzero) and kept while those stay the same.
     """
-    inactive = ~active
-    dy = np.zeros_like(y)
-    dp_rigid = np.zeros_like(p_rigid)
-    dy[active] = g[active] - y[active]
-    dp_rigid[inactive] = -p_rigid[inactive]
-    rhs = -R - J11[:, active] @ dy[active] - J12[:, inactive] @ dp_rigid[inactive]
-    sol = sla.lu_solve(lu, rhs)
-    ni = int(inactive.sum())
-    dy[inactive] = sol[:ni]
-    dp_rigid[active] = sol[ni:]
-    return dy, dp_rigid
+
+    def __init__(self, A_norm, T_fric, active, dp, fric) -> None:
+        self.active = active
+        self.dp = dp
+        # the friction enters only through the columns with a nonzero slope
+        self.fric = fric if np.any(dp[~active]) else None
+        Mat = (A_norm + T_fric * fric[None, :]) * dp[None, :]
+        Mat[:, active] = A_norm[:, active]
+        inactive = np.flatnonzero(~active)
+        Mat[inactive, inactive] += 1.0
+        self.lu, self.piv, info = _getrf(Mat, overwrite_a=True)
+        if info != 0:
+            raise np.linalg.LinAlgError(f"singular reduced Newton matrix (pivot {info})")
+
+    def matches(self, active, dp, fric) -> bool:
+        """Same active set, slopes and (where it matters) friction: O(m) comparisons."""
+        return bool(
+            (active == self.active).all()
+            and (dp == self.dp).all()
+            and (self.fric is None or (fric == self.fric).all())
+        )
+
+    def solve(self, rhs: NDArray) -> NDArray:
+        return _getrs(self.lu, self.piv, rhs)[0]
+
+
+_getrf, _getrs = sla.get_lapack_funcs(("getrf", "getrs"), (np.zeros(1),))
 
 
 class CondensedNewton:
     """Semismooth Newton on the condensed system; one factorization of K per simulation.
+
+    The factorization (:func:`.backends.schur_factorize`) gives the block ``C`` of
+    ``K^{-1}`` on the contact dofs, hence the dense compliance blocks
+    ``C_NN = N K^{-1} N^T`` and ``C_NT = N K^{-1} Tau^T``. The unknowns are ``y = N u``
+    and ``p_rigid``; the condensed equations (paper 3.21 after eliminating u) are
+
+        R(y, p_rigid) = y - d + C_NN W (p(y - w) + p_rigid) + C_NT W Fric p(y - w) = 0
+
+    with ``d = N K^{-1} F`` and complementarity between ``p_rigid`` and ``g - y``. Every
+    step is certified by the residuals of these equations (:func:`condensed_residuals`);
+    the full displacement, when asked for, by those of the full system
+    (:func:`kkt_residuals`).
 
     Parameters
     ----------
@@ -84,24 +115,33 @@ class CondensedNewton:
         self.system = system
         self.options = options or NewtonOptions()
         m = system.m
-        # one factorization whose trailing block is the Schur complement on Gamma_C
-        self.factor = SchurFactor(system.K, system.contact_dofs.ravel(), system.dof_points)
+        self.factor = schur_factorize(
+            system.K, system.contact_dofs.ravel(), system.dof_points, self.options.backend
+        )
         C = self.factor.S_inv.reshape(m, 2, m, 2)  # block of K^{-1} on the contact dofs
         nu, tau = system.normals, system.tangents
         self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
         self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
-        self.A_norm = self.C_NN * system.weights[None, :]
-        self._eye = np.eye(m)
-        self._lu_cache: dict[bytes, tuple] = {}
-        self._fric_key: bytes | None = None
+        w = system.weights
+        self.A_norm = self.C_NN * w[None, :]
+        self._T = self.C_NT * w[None, :]
+        self._H = np.hstack([self.C_NN, self.C_NT])  # one product per iteration
+        self._x = np.zeros(2 * m)  # work arrays of the iteration
+        self._buf = np.zeros(2 * m)
+        self._inv_g_ref = 1.0 / max(float(np.abs(system.g).max()), _TINY)
+        self._reduced: _ReducedMatrix | None = None
         self._F: NDArray | None = None
         self._d: NDArray | None = None
+        # large dense products and LU factorizations run with one BLAS pool
+        self._threads = solver_threads if m >= 128 else contextlib.nullcontext
 
     def _normal_displacement_of_load(self, F: NDArray) -> NDArray:
-        """``d = N K^{-1} F``, recomputed only when the load changes."""
-        if self._F is None or not np.array_equal(F, self._F):
-            self._F = np.array(F, copy=True)
-            self._d = self.system.N @ self.factor.solve(self._F)
+        """``d = N K^{-1} F``, solved again only for a new load (the same array object,
+        as a constant load gives, is recognised without looking at its entries)."""
+        if F is not self._F:
+            if self._F is None or not np.array_equal(F, self._F):
+                self._d = self.system.N @ self.factor.solve(F)
+            self._F = F
         return self._d  # type: ignore[return-value]
 
     def recover_many(
@@ -125,38 +165,10 @@ class CondensedNewton:
         With ``recover=False`` the full displacement is not computed (``u`` is None);
         :meth:`recover_many` computes it later for several levels at once.
         """
-        s, opt = self.system, self.options
-        d = self._normal_displacement_of_load(step.F)
-        if guess is not None:
-            y, p_rigid = np.array(guess.u_nu, copy=True), np.array(guess.p_rigid, copy=True)
-        else:
-            y, p_rigid = np.minimum(d, s.g), np.zeros(s.m)
-        A_norm = self.A_norm
-        A_fric = self.C_NT * (s.weights * step.fric)[None, :]
-        fric_key = step.fric.tobytes()
-        if fric_key != self._fric_key:  # the Newton matrices depend on the friction direction
-            self._lu_cache.clear()
-            self._fric_key = fric_key
-        it = 0
-        while True:
-            r = y - step.w
-            p_soft, dp = s.p(r), s.p.derivative(r)
-            R = y - d + A_norm @ (p_soft + p_rigid) + A_fric @ p_soft
-            res = condensed_residuals(s, y, p_rigid, R)
-            if max(res.values()) <= 0.1 * opt.tol or it == opt.max_iter:
-                break
-            it += 1
-            active = p_rigid + s.c_ncp * (y - s.g) > 0
-            J11 = self._eye + (A_norm + A_fric) * dp[None, :]
-            key = active.tobytes() + dp.tobytes()
-            lu = self._lu_cache.get(key)
-            if lu is None:  # same active set and slopes as before: reuse the factorization
-                lu = sla.lu_factor(_reduced_matrix(J11, A_norm, active), check_finite=False)
-                if len(self._lu_cache) >= 8:
-                    self._lu_cache.pop(next(iter(self._lu_cache)))
-                self._lu_cache[key] = lu
-            dy, dp_rigid = _active_set_step(lu, J11, A_norm, y, p_rigid, R, active, s.g)
-            y, p_rigid = y + dy, p_rigid + dp_rigid
+        with self._threads():
+            y, p_rigid, it, errors = self._iterate(step, guess)
+        s = self.system
+        res = dict(zip(RESIDUAL_NAMES, errors, strict=True))
         p_rigid = np.maximum(p_rigid, 0.0)
         p_soft = s.p(y - step.w)
         u = None
@@ -164,10 +176,81 @@ class CondensedNewton:
             u = self.recover_many([step], [p_rigid], [p_soft])[:, 0]
             res = kkt_residuals(s, step, u, p_rigid)
             y = s.N @ u
-        check_converged(res, opt.tol, step, "semismooth Newton (condensed)", it)
+        check_converged(res, self.options.tol, step, "semismooth Newton (condensed)", it)
         return StepSolution(
             u=u, u_nu=y, p_rigid=p_rigid, p_soft=p_soft, iterations=it, residuals=res
         )
+
+    def _iterate(self, step: StepData, guess: StepSolution | None):
+        """The Newton iterations; returns y, p_rigid, the iteration count and the three
+        condensed residuals of the last iterate.
+
+        Each iteration solves ``J11 dy + C_NN W dp_rigid = -R`` with ``dy = g - y`` on
+        the active and ``dp_rigid = -p_rigid`` on the inactive set (the linearization of
+        R, ``J11 = I + M D``); when the active set is the same as at the previous
+        iterate, these prescribed parts are zero and the right-hand side is ``-R``.
+        """
+        s, opt = self.system, self.options
+        d = self._normal_displacement_of_load(step.F)
+        g, c_ncp, wear, fric, law = s.g, s.c_ncp, step.w, step.fric, s.p
+        if guess is not None:
+            y, p_rigid = np.array(guess.u_nu, copy=True), np.array(guess.p_rigid, copy=True)
+        else:
+            y, p_rigid = np.minimum(d, g), np.zeros(s.m)
+        m, w, H, x, buf = s.m, s.weights, self._H, self._x, self._buf
+        wf = w * fric
+        inv_g = self._inv_g_ref
+        stop = 0.1 * opt.tol
+        it = 0
+        while True:
+            r = y - wear
+            p_soft = law(r)
+            # R = y - d + C_NN W (p_soft + p_rigid) + C_NT W Fric p_soft
+            np.multiply(w, p_soft + p_rigid, out=x[:m])
+            np.multiply(wf, p_soft, out=x[m:])
+            R = H @ x
+            R += y
+            R -= d
+            errors = _condensed_errors(y, p_rigid, R, g, inv_g, buf)
+            if max(errors) <= stop or it == opt.max_iter:
+                return y, p_rigid, it, errors
+            it += 1
+            active = p_rigid + c_ncp * (y - g) > 0.0
+            dp = law.derivative(r)
+            red = self._reduced
+            if red is None or not red.matches(active, dp, fric):
+                red = self._reduced = _ReducedMatrix(self.A_norm, self._T, active, dp, fric)
+            dy_A = np.where(active, g - y, 0.0)
+            dp_I = np.where(active, 0.0, p_rigid)
+            rhs = -R
+            if dy_A.any() or dp_I.any():
+                # rhs -= J11 dy_A + C_NN W (-p_rigid_I)
+                t = dp * dy_A
+                np.multiply(w, t - dp_I, out=x[:m])
+                np.multiply(wf, t, out=x[m:])
+                rhs -= dy_A
+                rhs -= H @ x
+            sol = red.solve(rhs)
+            y = np.where(active, g, y + sol)
+            p_rigid = np.where(active, p_rigid + sol, 0.0)
+
+
+def _condensed_errors(y, p_rigid, R, g, inv_g, buf) -> tuple[float, float, float]:
+    """The three condensed residuals of :func:`condensed_residuals`, as a tuple.
+
+    The feasibility residual is never above the complementarity residual (where
+    ``y > g``, ``|min(p_rigid / p_ref, (g - y) / g_ref)| >= (y - g) / g_ref``), so the
+    largest of the three is the largest entry of ``buf = |[R / g_ref, ncp]|``; the
+    feasibility value is read from the same numbers.
+    """
+    m = len(y)
+    p_ref = max(float(p_rigid.max()), -float(p_rigid.min())) or _TINY
+    np.multiply(R, inv_g, out=buf[:m])
+    gap = g - y
+    gap *= inv_g
+    np.minimum(p_rigid / p_ref, gap, out=buf[m:])
+    np.abs(buf, out=buf)
+    return float(buf[:m].max()), max(0.0, -float(gap.min())), float(buf[m:].max())
 
 
 class FullNewton:

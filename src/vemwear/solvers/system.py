@@ -21,6 +21,11 @@ from numpy.typing import NDArray
 
 from ..contact.law import ComplianceLaw
 
+#: The scaled KKT residuals every step reports, in this order.
+RESIDUAL_NAMES = ("equilibrium", "feasibility", "complementarity")
+
+_TINY = float(np.finfo(float).tiny)
+
 
 class ConvergenceError(RuntimeError):
     """A step problem whose solver did not reach its tolerance."""
@@ -115,13 +120,14 @@ def _residuals(
     system: ContactSystem, y: NDArray, p_rigid: NDArray, equilibrium: float, p_ref: float
 ) -> dict[str, float]:
     """The three residuals, given the scaled equilibrium residual and the pressure scale."""
-    g_ref = max(float(np.abs(system.g).max()), np.finfo(float).tiny)
+    g_ref = max(float(np.abs(system.g).max()), _TINY)
     ncp = np.minimum(p_rigid / p_ref, (system.g - y) / g_ref)
-    return {
-        "equilibrium": float(equilibrium),
-        "feasibility": float(max(0.0, (y - system.g).max(initial=0)) / g_ref),
-        "complementarity": float(np.abs(ncp).max(initial=0)),
-    }
+    values = (
+        float(equilibrium),
+        float(max(0.0, (y - system.g).max(initial=0)) / g_ref),
+        float(np.abs(ncp).max(initial=0)),
+    )
+    return dict(zip(RESIDUAL_NAMES, values, strict=True))
 
 
 def kkt_residuals(
@@ -137,7 +143,7 @@ def kkt_residuals(
     force, p_soft = system.contact_force(u, p_rigid, step.fric, step.w)
     Ku = system.K @ u
     r = Ku - step.F + force
-    tiny = np.finfo(float).tiny
+    tiny = _TINY
     fscale = max(
         np.abs(step.F).max(initial=0), np.abs(Ku).max(initial=0), np.abs(force).max(initial=0), tiny
     )
@@ -150,7 +156,7 @@ def condensed_residuals(
 ) -> dict[str, float]:
     """The residuals of the condensed equations ``R(y, p_rigid) = 0`` (R in displacement
     units, scaled by max g) with the complementarity conditions on y = N u."""
-    tiny = np.finfo(float).tiny
+    tiny = _TINY
     g_ref = max(float(np.abs(system.g).max()), tiny)
     p_ref = max(float(np.abs(p_rigid).max(initial=0)), tiny)
     return _residuals(system, y, p_rigid, np.abs(R).max(initial=0) / g_ref, p_ref)

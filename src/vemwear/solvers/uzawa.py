@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .linalg import factorize
+from .backends import factorize
 from .system import (
     ContactSystem,
     StepData,

@@ -1,0 +1,136 @@
+"""Sparse direct backends behind one interface (see :mod:`.base`).
+
+========  ==========================================================  ==============
+name      Schur complement on the contact dofs                        installed by
+========  ==========================================================  ==============
+pardiso   MKL PARDISO, partial Cholesky factorization (iparm[35])     ``pypardiso``
+scipy     SciPy's SuperLU, trailing block of the full LU factors      always
+========  ==========================================================  ==============
+
+``"auto"`` picks the first installed backend of :data:`PREFERENCE`. A new backend
+(MUMPS through a binding that imports with the installed NumPy, for one; its Schur
+output, ICNTL(19), is valid in the lower triangle only, which
+:func:`.base.compliance_from_schur` already reads) is one module with a
+``available()`` function and a class with the :class:`.base.SchurFactorization`
+interface, plus one line in :data:`_MODULES`.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from .base import Factorization, SchurFactorization, compliance_from_schur
+
+BACKENDS = ("auto", "scipy", "pardiso")
+
+#: Installed backends are tried in this order by ``"auto"``.
+PREFERENCE = ("pardiso", "scipy")
+
+#: Below this many unknowns SuperLU factorizes about as fast as PARDISO; the
+#: full-space Newton path (a new factorization per iteration) uses PARDISO above it.
+PARDISO_MIN_SIZE = 20_000
+
+_MODULES = {"scipy": ".superlu", "pardiso": ".pardiso"}
+_HINT = {"pardiso": "pip install 'vemwear[fast]' (needs MKL wheels: Linux or Windows x86_64)"}
+
+
+def _module(name: str) -> Any:
+    return importlib.import_module(_MODULES[name], __name__)
+
+
+def is_available(name: str) -> bool:
+    """True when the backend ``name`` can be used on this machine."""
+    if name == "scipy":
+        return True
+    mod = _module(name)
+    return bool(mod.available())
+
+
+def available_backends() -> list[str]:
+    """The installed backends, fastest first."""
+    return [b for b in PREFERENCE if is_available(b)]
+
+
+def resolve_backend(backend: str = "auto", size: int = 0, many_factorizations: bool = False) -> str:
+    """The backend used for ``backend``: ``"auto"`` becomes the fastest installed one.
+
+    ``many_factorizations`` (with ``size``) describes the full-space Newton path, a new
+    factorization per iteration: there ``"auto"`` keeps SuperLU for matrices below
+    :data:`PARDISO_MIN_SIZE` unknowns.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name or a backend that is not installed.
+    """
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown linear-algebra backend {backend!r}; expected one of {BACKENDS}")
+    if backend == "auto":
+        if many_factorizations and size < PARDISO_MIN_SIZE:
+            return "scipy"
+        return available_backends()[0]
+    if not is_available(backend):
+        raise ValueError(
+            f"backend {backend!r} asked for but it is not installed ({_HINT.get(backend, '')})"
+        )
+    return backend
+
+
+def factorize(
+    A: sp.spmatrix,
+    backend: str = "auto",
+    *,
+    symmetric: bool = True,
+    many_factorizations: bool = False,
+) -> Factorization:
+    """Factorize a sparse matrix once; the result solves for any number of right-hand sides.
+
+    ``symmetric`` declares ``A`` SPD (SuperLU's symmetric mode, PARDISO's Cholesky);
+    ``many_factorizations`` tells ``"auto"`` that the caller factorizes again and again
+    (see :func:`resolve_backend`).
+    """
+    chosen = resolve_backend(backend, A.shape[0], many_factorizations)
+    if chosen == "pardiso":
+        return _module("pardiso").PardisoFactor(A, spd=symmetric)
+    return _module("scipy").SuperLUFactor(A, symmetric=symmetric)
+
+
+def schur_factorize(
+    K: sp.spmatrix,
+    last: NDArray[np.int64],
+    points: NDArray[np.float64],
+    backend: str = "auto",
+) -> SchurFactorization:
+    """Factorize SPD ``K`` once, with the block of ``K^{-1}`` on the dofs ``last``.
+
+    Parameters
+    ----------
+    K : (n, n) sparse SPD matrix (the stiffness on the free dofs)
+    last : (c,) dof ids of the Schur block (the contact dofs), in the order wanted
+    points : (n, 2) coordinates of each dof's vertex (SuperLU's geometric ordering)
+    backend : a name of :data:`BACKENDS`
+    """
+    chosen = resolve_backend(backend)
+    if chosen == "pardiso":
+        return _module("pardiso").PardisoSchur(K, last, points)
+    return _module("scipy").SuperLUSchur(K, last, points)
+
+
+__all__ = [
+    "BACKENDS",
+    "PARDISO_MIN_SIZE",
+    "PREFERENCE",
+    "Factorization",
+    "SchurFactorization",
+    "available_backends",
+    "compliance_from_schur",
+    "factorize",
+    "is_available",
+    "resolve_backend",
+    "schur_factorize",
+]

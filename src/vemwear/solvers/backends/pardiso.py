@@ -1,0 +1,279 @@
+"""Intel MKL PARDISO through its C routine ``pardiso`` in MKL's single dynamic library.
+
+``mkl_rt`` is looked up where the ``mkl`` wheel (a dependency of ``pypardiso``) puts
+it, ``$PYPARDISO_MKL_RT`` first; pypardiso's own search (which walks the whole
+installation) is only the last resort.
+
+:class:`PardisoSchur` factorizes the SPD stiffness (``mtype = 2``, Cholesky) with the
+Schur option ``iparm[35] = 2``: the rows marked in ``perm`` (the contact dofs) are
+left out of the factorization, which returns their Schur complement
+``S = K_cc - K_ci K_ii^{-1} K_ic`` as a dense matrix and keeps the factors of
+``K_ii``. Block solves with ``K`` use the same factorization (phase 33, which
+completes the elimination with the Schur block; the partial phases 331/333 with the
+dense ``S_inv`` in between give the same result but were 1.3-1.8 times slower in
+``benchmarks/bench_backends.py``). No factor of the whole matrix is formed in the
+factorization phase.
+
+:class:`PardisoFactor` factorizes any square matrix (real nonsymmetric, ``mtype =
+11``, or SPD, ``mtype = 2``) for the full-space Newton path and Uzawa.
+
+The handle ``pt`` of a factorization is released (phase -1) when its object is
+garbage collected.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import glob
+import os
+import site
+import sys
+import time
+import weakref
+from functools import cache
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from ..threads import solver_threads
+from .base import compliance_from_schur
+
+_ERRORS = {
+    -1: "input inconsistent",
+    -2: "not enough memory",
+    -3: "reordering problem",
+    -4: "zero pivot: the matrix is not positive definite (or is singular)",
+    -5: "unclassified internal error",
+    -6: "reordering failed",
+    -7: "diagonal matrix is singular",
+    -8: "32-bit integer overflow",
+    -9: "not enough memory for out-of-core",
+    -10: "error opening out-of-core files",
+    -11: "read/write error with out-of-core files",
+    -12: "wrong PARDISO version for the 64-bit interface",
+    -13: "interrupted",
+    -15: "Schur complement error",
+}
+
+
+def available() -> bool:
+    """True when MKL's PARDISO can be loaded (``pypardiso`` installed with MKL)."""
+    try:
+        _routine()
+    except Exception:
+        return False
+    return True
+
+
+def _mkl_rt() -> Any:
+    """MKL's runtime library, loaded with ctypes.
+
+    Idle OpenMP threads of MKL sleep at once instead of spinning for 200 ms after
+    each parallel region (``KMP_BLOCKTIME=0`` unless set already): on a machine with
+    few or busy cores the spinning threads otherwise take the cores from the work
+    that follows (the factorization time varied by more than a factor two without).
+    """
+    os.environ.setdefault("KMP_BLOCKTIME", "0")
+    env = os.environ.get("PYPARDISO_MKL_RT")
+    candidates = [env] if env else []
+    for root in dict.fromkeys((sys.prefix, sys.base_prefix, site.USER_BASE or "")):
+        if root:
+            candidates += sorted(glob.glob(os.path.join(root, "lib", "libmkl_rt.so*")))
+            candidates += sorted(glob.glob(os.path.join(root, "Library", "bin", "mkl_rt*.dll")))
+    for path in candidates:
+        try:
+            return ctypes.CDLL(path)
+        except OSError:
+            continue
+    import pypardiso  # searches everywhere; raises when MKL is missing
+
+    return pypardiso.ps.libmkl
+
+
+@cache
+def _routine() -> Any:
+    """MKL's ``pardiso`` C routine with its argument types."""
+    f = _mkl_rt().pardiso
+    i32p = ctypes.POINTER(ctypes.c_int32)
+    f.argtypes = [
+        ctypes.POINTER(ctypes.c_int64),  # pt
+        i32p,  # maxfct
+        i32p,  # mnum
+        i32p,  # mtype
+        i32p,  # phase
+        i32p,  # n
+        ctypes.c_void_p,  # a
+        i32p,  # ia
+        i32p,  # ja
+        i32p,  # perm
+        i32p,  # nrhs
+        i32p,  # iparm
+        i32p,  # msglvl
+        ctypes.c_void_p,  # b
+        ctypes.c_void_p,  # x
+        i32p,  # error
+    ]
+    f.restype = None
+    return f
+
+
+class _Handle:
+    """One PARDISO factorization: the matrix in 0-based CSR, ``pt``, ``iparm``, ``perm``."""
+
+    def __init__(self, A: sp.csr_matrix, mtype: int, iparm: dict[int, int], perm=None) -> None:
+        self.f = _routine()
+        self.n = A.shape[0]
+        self.mtype = mtype
+        self.a = np.ascontiguousarray(A.data, dtype=np.float64)
+        self.ia = np.ascontiguousarray(A.indptr, dtype=np.int32)
+        self.ja = np.ascontiguousarray(A.indices, dtype=np.int32)
+        self.pt = np.zeros(64, dtype=np.int64)
+        self.iparm = np.zeros(64, dtype=np.int32)
+        self.iparm[0] = 1  # the values below, zero (default) elsewhere
+        self.iparm[34] = 1  # 0-based indexing
+        for k, v in iparm.items():
+            self.iparm[k] = v
+        self.perm = np.zeros(self.n, dtype=np.int32) if perm is None else perm
+        self.live = False
+
+    def __call__(self, phase: int, b: NDArray, x: NDArray, nrhs: int = 1) -> None:
+        i32 = ctypes.c_int32
+        i32p = ctypes.POINTER(i32)
+        err = i32(0)
+        self.f(
+            self.pt.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
+            ctypes.byref(i32(1)),
+            ctypes.byref(i32(1)),
+            ctypes.byref(i32(self.mtype)),
+            ctypes.byref(i32(phase)),
+            ctypes.byref(i32(self.n)),
+            self.a.ctypes.data,
+            self.ia.ctypes.data_as(i32p),
+            self.ja.ctypes.data_as(i32p),
+            self.perm.ctypes.data_as(i32p),
+            ctypes.byref(i32(nrhs)),
+            self.iparm.ctypes.data_as(i32p),
+            ctypes.byref(i32(0)),
+            b.ctypes.data,
+            x.ctypes.data,
+            ctypes.byref(err),
+        )
+        if phase > 0:
+            self.live = True
+        if err.value != 0:
+            why = _ERRORS.get(err.value, "unknown error")
+            raise RuntimeError(f"PARDISO phase {phase} failed with error {err.value}: {why}")
+
+    def release(self) -> None:
+        """Free PARDISO's internal memory (phase -1)."""
+        if self.live:
+            self.live = False
+            dummy = np.zeros(1)
+            self(-1, dummy, dummy)
+
+
+def _block(b: NDArray, n: int) -> tuple[NDArray, int]:
+    """Right-hand sides as a Fortran-ordered (n, k) float array, and k."""
+    b = np.asarray(b, dtype=np.float64)
+    if b.shape[0] != n:
+        raise ValueError(f"right-hand side has {b.shape[0]} rows, the matrix {n}")
+    k = 1 if b.ndim == 1 else b.shape[1]
+    return np.asfortranarray(b.reshape(n, k)), k
+
+
+class PardisoFactor:
+    """PARDISO factorization of a square sparse matrix; SPD (Cholesky) when ``spd``."""
+
+    name = "pardiso"
+
+    def __init__(self, A: sp.spmatrix, spd: bool = False) -> None:
+        A = sp.csr_matrix(A, dtype=np.float64)
+        if spd:
+            A = sp.triu(A, format="csr")
+            settings = {1: 2}  # METIS ordering
+        else:  # METIS, pivot perturbation 1e-13, scaling and matching
+            settings = {1: 2, 9: 13, 10: 1, 12: 1}
+        A.sort_indices()
+        self._h = _Handle(A, 2 if spd else 11, settings)
+        weakref.finalize(self, self._h.release)
+        dummy = np.zeros(1)
+        with solver_threads():
+            self._h(12, dummy, dummy)
+
+    def solve(self, b: NDArray[np.float64]) -> NDArray[np.float64]:
+        B, k = _block(b, self._h.n)
+        X = np.zeros_like(B)
+        with solver_threads():
+            self._h(33, B, X, k)
+        return X[:, 0] if np.ndim(b) == 1 else X
+
+
+class PardisoSchur:
+    """PARDISO Cholesky factorization of an SPD matrix with the Schur complement on ``last``.
+
+    Parameters
+    ----------
+    K : (n, n) sparse SPD matrix
+    last : (c,) dof ids of the Schur block, in this order
+    points : unused (PARDISO orders by METIS); accepted for a common signature
+    """
+
+    name = "pardiso"
+
+    def __init__(self, K: sp.spmatrix, last: NDArray[np.int64], points: Any = None) -> None:
+        self.timings: dict[str, float] = {}
+        tick = time.perf_counter()
+        n = K.shape[0]
+        last = np.asarray(last, dtype=np.int64).ravel()
+        c = len(last)
+        if len(np.unique(last)) != c:
+            raise ValueError("Schur dofs: the list of contact dofs has repeated entries")
+        U = sp.triu(sp.csr_matrix(K, dtype=np.float64), format="csr")
+        U.sort_indices()
+        perm = np.zeros(n, dtype=np.int32)
+        perm[last] = 1
+        self._h = _Handle(U, 2, {1: 2, 35: 2}, perm)
+        weakref.finalize(self, self._h.release)
+        self.last = last
+        self.n = n
+        self.timings["ordering"] = time.perf_counter() - tick
+        dummy = np.zeros(1)
+        out = np.zeros(max(n, c * c))
+        with solver_threads():
+            tick = time.perf_counter()
+            self._h(11, dummy, out)
+            self.timings["ordering"] += time.perf_counter() - tick
+            tick = time.perf_counter()
+            self._h(22, dummy, out)
+            self.timings["factorization"] = time.perf_counter() - tick
+            tick = time.perf_counter()
+            # PARDISO numbers the Schur rows in increasing dof order
+            S = out[: c * c].reshape(c, c)
+            order = np.argsort(last)
+            rank = np.empty(c, dtype=np.int64)
+            rank[order] = np.arange(c)
+            self.S_inv = compliance_from_schur(S[np.ix_(rank, rank)])
+            self.timings["schur"] = time.perf_counter() - tick
+
+    def solve(self, b: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``K^{-1} b`` for a vector or an (n, k) block of right-hand sides."""
+        B, k = _block(b, self.n)
+        X = np.zeros_like(B)
+        with solver_threads():
+            self._h(33, B, X, k)
+        return X[:, 0] if np.ndim(b) == 1 else X
+
+    def solve_partial(self, b: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The same solve by the partial phases: forward substitution (331), whose
+        contact rows hold ``b_c - K_ci K_ii^{-1} b_i``, ``x_c = S_inv (...)``, backward
+        substitution (333)."""
+        B, k = _block(b, self.n)
+        Y = np.zeros_like(B)
+        X = np.zeros_like(B)
+        with solver_threads():
+            self._h(331, B, Y, k)
+            Y[self.last] = self.S_inv @ Y[self.last]
+            self._h(333, Y, X, k)
+        return X[:, 0] if np.ndim(b) == 1 else X

@@ -1,0 +1,68 @@
+"""One BLAS thread pool at a time: OpenBLAS pools limited around the solver's kernels.
+
+NumPy's and SciPy's wheels each bundle an OpenBLAS with its own pool of threads, and
+MKL (PARDISO) brings a third. On a machine with few cores these pools spin against
+each other: a multi-column SuperLU solve or a small dense Cholesky factorization can
+become ten times slower, at random. :func:`solver_threads` limits the OpenBLAS pools
+to one thread while the solver's dense and sparse kernels run and leaves MKL's pool
+(the multithreaded PARDISO factorization) alone. The limits are set and restored
+through one cached :class:`threadpoolctl.ThreadpoolController` (about 20 µs a
+context), so callers enter the context around whole kernels, not around tiny ones.
+
+``VEMWEAR_BLAS_THREADS=keep`` in the environment turns the control off (for
+measurements of the uncontrolled behaviour).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Iterator
+from functools import cache
+from typing import Any
+
+
+@cache
+def _controller() -> Any:
+    """The cached controller of the loaded BLAS libraries, or None without threadpoolctl."""
+    try:
+        from threadpoolctl import ThreadpoolController
+    except ImportError:  # pragma: no cover - threadpoolctl is a dependency
+        return None
+    return ThreadpoolController()
+
+
+@cache
+def _openblas() -> Any:
+    """The controller of the loaded OpenBLAS libraries only (NumPy's and SciPy's)."""
+    ctl = _controller()
+    return None if ctl is None else ctl.select(internal_api="openblas")
+
+
+def _refresh() -> Any:
+    """A controller that also sees the libraries loaded since (MKL by PARDISO)."""
+    try:
+        from threadpoolctl import ThreadpoolController
+    except ImportError:  # pragma: no cover - threadpoolctl is a dependency
+        return None
+    return ThreadpoolController()
+
+
+@contextlib.contextmanager
+def solver_threads() -> Iterator[None]:
+    """Run the enclosed kernels with the OpenBLAS pools at one thread each."""
+    ctl = _openblas() if os.environ.get("VEMWEAR_BLAS_THREADS") != "keep" else None
+    if ctl is None:
+        yield
+        return
+    with ctl.limit(limits=1):
+        yield
+
+
+def blas_info() -> list[dict[str, Any]]:
+    """The loaded BLAS and OpenMP libraries with their thread counts (for benchmarks)."""
+    ctl = _refresh()
+    return [] if ctl is None else ctl.info()
+
+
+__all__ = ["blas_info", "solver_threads"]
