@@ -115,17 +115,3 @@ def test_solution_roundtrip_and_reference_comparison() -> None:
     # not nested
     with pytest.raises(NonNestedMeshError):
         cmp.errors(simulate(ex55.problem(3)))
-
-
-@pytest.mark.slow
-def test_first_rows_of_tables_1_and_2() -> None:
-    """h = k = 1/4 against the paper's reference h = k = 1/256 (about 15 s).
-
-    Measured: u_H1 = 6.8533e-2 (paper 7.0581e-2, ratio 0.971) and w_L2 = 5.3978e-2
-    (paper 1.1153e-1, ratio 0.484; docs/paper.md explains the factor 2).
-    """
-    ref = simulate(ex55.problem(256), store=ex55.common_times([4]))
-    h = Comparison(ref).errors(simulate(ex55.problem(4), store="final"), levels="final")
-    assert h.at_T("displacement") == pytest.approx(6.8533e-2, rel=0.02)
-    assert h.at_T("wear") == pytest.approx(5.3978e-2, rel=0.02)
-    assert abs(h.at_T("displacement") / ex55.PAPER_TABLE1["errors"][4] - 1.0) < 0.04

@@ -231,3 +231,41 @@ def test_paper_report_small(tmp_path: Path) -> None:
     # every figure is linked
     for png in out.rglob("*.png"):
         assert str(png.relative_to(out)) in text, png
+
+
+# ----------------------------------------------------------------------------- the driver
+def test_driver_rejects_unknown_parameters_before_any_run(tmp_path: Path) -> None:
+    with pytest.raises(TypeError, match=r"unknown parameter\(s\) base_step; it takes"):
+        ex53.run(tmp_path, base_step=8)
+    with pytest.raises(ValueError, match="multiple of 4"):
+        ex53.run(tmp_path, base_steps=6)
+    with pytest.raises(ValueError, match="must divide the reference"):
+        ex55.run(tmp_path, levels=(3,), reference=8)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_available_examples_imports_no_example_and_no_numerics() -> None:
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, vemwear.paper as p; d = p.available_examples(); "
+        "assert list(d) == ['5.2', '5.3', '5.4', '5.5'], d; "
+        "assert all(v.startswith('Example 5.') for v in d.values()), d; "
+        "bad = [m for m in ('numpy', 'vemwear.paper.ex52', 'vemwear.simulate') "
+        "if m in sys.modules]; assert not bad, bad"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_every_example_is_data_for_the_one_driver() -> None:
+    from vemwear.paper import DESCRIPTIONS, load_example
+    from vemwear.paper.spec import Example
+
+    for name in EXAMPLES:
+        ex = load_example(name).EXAMPLE
+        assert isinstance(ex, Example) and ex.name == name
+        assert ex.description == DESCRIPTIONS[name] and ex.paper_section is not None
+        assert ex.headlines, name  # pinned in tests/test_paper_numbers.py
+        names = [f.name for f in ex.outputs]
+        assert len(names) == len(set(names)) and ex.report_name not in names

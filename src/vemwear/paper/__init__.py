@@ -1,22 +1,17 @@
-"""The numerical examples of the paper (Wu, Wang, Han, Section 5), defined in Python.
+"""The numerical examples of the paper (Wu, Wang, Han, Section 5), as data plus one driver.
 
-Every example lives in a sibling module (``ex52`` for Example 5.2, later ``ex53``,
-``ex54``, ``ex55``) registered in :data:`EXAMPLES`, and follows one pattern:
+Each example is a module (``ex52`` for Example 5.2, ... ``ex55``) registered in
+:data:`EXAMPLES` that holds the example's data: its problems as functions of its
+sizes (the paper's by default), what it computes and compares, its figures, its
+report rows and its headline numbers, gathered in one
+:class:`~vemwear.paper.spec.Example` called ``EXAMPLE``. The one driver
+:func:`vemwear.paper.driver.run_example` runs any of them (each module's ``run`` is
+that call); :func:`vemwear.paper.report.run_paper` runs them all and writes the report
+beside the paper's numbers. ``vemwear example NAME`` and ``vemwear paper`` go through
+them. The paper's examples are a client of the library: nothing here imports the
+command line.
 
-``NAME``, ``TITLE``, ``DESCRIPTION``
-    The example's number (``"5.2"``), a title and a one-line description (shown by
-    ``vemwear example --help``).
-``problems(**size) -> dict[str, Problem]``
-    The example's problems by name (``set1``, ``set2``, ...); size parameters (mesh
-    divisions, time steps) default to the paper's values so that tests can build
-    smaller versions.
-``run(outdir, *, solver="newton", progress=False, figures=True, vtk=True, log=None,
-**size) -> ExampleRun``
-    Solve every problem and write into the existing directory ``outdir``: one
-    subdirectory per problem with the standard output of ``vemwear run``, plus the
-    example's own figures and a Markdown report at the top.
-
-``vemwear example NAME -o OUTDIR`` runs ``run`` inside an atomic output directory.
+Importing this package is cheap: :func:`available_examples` reads the registry only.
 """
 
 from __future__ import annotations
@@ -30,7 +25,14 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from ..simulate import Result
 
-__all__ = ["EXAMPLES", "ExampleRun", "available_examples", "load_example"]
+__all__ = [
+    "DESCRIPTIONS",
+    "EXAMPLES",
+    "ExampleRun",
+    "available_examples",
+    "load_example",
+    "run_example",
+]
 
 #: Example number -> module name in this package.
 EXAMPLES: dict[str, str] = {
@@ -40,10 +42,22 @@ EXAMPLES: dict[str, str] = {
     "5.5": "ex55",
 }
 
+#: Example number -> one-line description (``vemwear example --list``).
+DESCRIPTIONS: dict[str, str] = {
+    "5.2": "wear and penetration for (mu, kappa) = (0.2, 2), (0.2, 10), (0.6, 10) "
+    "(paper Figs. 3-5)",
+    "5.3": "wear at t = 1 for uniform k = 1/64, alternating 1/128, 3/128, uniform 1/32 "
+    "and 1/16 (paper Fig. 6)",
+    "5.4": "2048 squares against 2048 Voronoi polygons: u_1, u_2, u_nu and wear at t = 1 "
+    "(paper Figs. 7-9), with a Voronoi refinement study",
+    "5.5": "relative errors and orders for h = k = 1/4 ... 1/64 against h = k = 1/256 "
+    "(paper Tables 1 and 2)",
+}
+
 
 @dataclass
 class ExampleRun:
-    """What an example's ``run`` produced.
+    """What a run of an example produced.
 
     Attributes
     ----------
@@ -58,9 +72,11 @@ class ExampleRun:
     report : Path or None
         The Markdown report.
     details : dict
-        Example-specific numbers (e.g. maximal wear per data set, the paper's findings).
+        Example-specific numbers (e.g. maximal wear per data set, error tables).
     elapsed : float
-        Wall time of ``run`` in seconds.
+        Wall time of the run in seconds.
+    headlines : dict of str to float
+        The example's headline numbers (those ``tests/test_paper_numbers.py`` pins).
     """
 
     name: str
@@ -70,10 +86,16 @@ class ExampleRun:
     report: Path | None = None
     details: dict[str, Any] = field(default_factory=dict)
     elapsed: float = 0.0
+    headlines: dict[str, float] = field(default_factory=dict)
 
 
 def load_example(name: str) -> ModuleType:
-    """The module of example ``name`` (e.g. ``"5.2"``).
+    """The module of example ``name`` (e.g. ``"5.2"``); its data is ``module.EXAMPLE``.
+
+    Parameters
+    ----------
+    name : str
+        The example number.
 
     Raises
     ------
@@ -86,9 +108,28 @@ def load_example(name: str) -> ModuleType:
 
 
 def available_examples() -> dict[str, str]:
-    """``{number: one-line description}`` of every registered example."""
-    out = {}
-    for name in EXAMPLES:
-        mod = load_example(name)
-        out[name] = f"{mod.TITLE}: {mod.DESCRIPTION}"
-    return out
+    """``{number: "Example 5.N: one-line description"}`` of every registered example.
+
+    Reads the registry only (no example module is imported), so it is cheap.
+    """
+    return {name: f"Example {name}: {DESCRIPTIONS[name]}" for name in EXAMPLES}
+
+
+def run_example(name: str, outdir: str | Path, **options: Any) -> ExampleRun:
+    """Run example ``name`` through the driver (:func:`vemwear.paper.driver.run_example`).
+
+    Parameters
+    ----------
+    name : str
+        The example number, e.g. ``"5.2"``.
+    outdir : path
+        An existing directory to write into.
+    **options
+        The driver's options (``solver``, ``progress``, ``figures``, ``vtk``, ``log``)
+        and the example's parameters (its sizes).
+
+    Returns
+    -------
+    ExampleRun
+    """
+    return load_example(name).run(outdir, **options)  # type: ignore[no-any-return]

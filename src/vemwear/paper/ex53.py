@@ -25,22 +25,25 @@ from __future__ import annotations
 import csv
 import io
 import itertools
-import time
-from collections.abc import Callable
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
+from math import gcd
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..post.outputs import write_outputs
-from ..simulate import Problem, Result, SolverOptions, TimeGrid, simulate
-from . import ExampleRun, ex52
+from ..simulate import Problem, Result, TimeGrid
+from . import DESCRIPTIONS, ExampleRun, ex52
+from .driver import run_example
+from .markdown import links, num
+from .spec import Column, Context, Example, OutputFile, text_output
 
 __all__ = [
     "BASE_STEPS",
     "DESCRIPTION",
     "DIVISIONS",
+    "EXAMPLE",
     "GRID_LABELS",
     "KAPPA",
     "MU",
@@ -49,17 +52,15 @@ __all__ = [
     "differences",
     "differences_csv",
     "differences_markdown",
+    "first_order_note",
     "problems",
     "run",
     "time_grids",
 ]
 
 NAME = "5.3"
-TITLE = "Example 5.3"
-DESCRIPTION = (
-    "wear at t = 1 for uniform k = 1/64, alternating 1/128, 3/128, uniform 1/32 "
-    "and 1/16 (paper Fig. 6)"
-)
+TITLE = f"Example {NAME}"
+DESCRIPTION = DESCRIPTIONS[NAME]
 
 DIVISIONS: tuple[int, int] = ex52.DIVISIONS  # h = 1/16
 BASE_STEPS: int = 64  # the finest uniform partition, k = 1/BASE_STEPS
@@ -75,11 +76,9 @@ GRID_LABELS: dict[str, str] = {
 }
 
 
-def _frac(num: int, den: int) -> str:
-    from math import gcd
-
-    g = gcd(num, den)
-    return f"{num // g}/{den // g}"
+def _frac(a: int, b: int) -> str:
+    g = gcd(a, b)
+    return f"{a // g}/{b // g}"
 
 
 def time_grids(base_steps: int = BASE_STEPS) -> dict[str, tuple[str, TimeGrid]]:
@@ -125,8 +124,13 @@ def problems(
     return out
 
 
-def differences(results: dict[str, Result]) -> list[dict[str, Any]]:
+def differences(results: Mapping[str, Result]) -> list[dict[str, Any]]:
     """Pairwise differences of w(T) between the partitions.
+
+    Parameters
+    ----------
+    results : mapping of str to Result
+        The runs, by partition name, finest first.
 
     Returns
     -------
@@ -161,8 +165,14 @@ def differences(results: dict[str, Result]) -> list[dict[str, Any]]:
     return rows
 
 
-def differences_csv(rows: list[dict[str, Any]]) -> str:
-    """The rows of :func:`differences` as CSV."""
+def differences_csv(rows: Sequence[dict[str, Any]]) -> str:
+    """The rows of :func:`differences` as CSV.
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        The rows of :func:`differences`.
+    """
     buf = io.StringIO()
     wr = csv.writer(buf, lineterminator="\n")
     wr.writerow(
@@ -183,8 +193,16 @@ def differences_csv(rows: list[dict[str, Any]]) -> str:
     return buf.getvalue()
 
 
-def differences_markdown(rows: list[dict[str, Any]], labels: dict[str, str]) -> str:
-    """The rows of :func:`differences` as a Markdown table."""
+def differences_markdown(rows: Sequence[dict[str, Any]], labels: Mapping[str, str]) -> str:
+    """The rows of :func:`differences` as a Markdown table.
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        The rows of :func:`differences`.
+    labels : mapping of str to str
+        Legend label of each partition, by name.
+    """
     lines = [
         "| grid a | grid b | max abs diff of w(T) | relative | L2(Gamma_C) relative |",
         "|---|---|---|---|---|",
@@ -197,7 +215,7 @@ def differences_markdown(rows: list[dict[str, Any]], labels: dict[str, str]) -> 
     return "\n".join(lines) + "\n"
 
 
-def _between(results: dict[str, Result], labels: dict[str, str]) -> str:
+def _between(results: Mapping[str, Result], labels: Mapping[str, str]) -> str:
     m = {n: float(r.wear[-1].max()) for n, r in results.items()}
     if not {"k64", "alt128", "k32"} <= set(m):
         return ""
@@ -209,36 +227,58 @@ def _between(results: dict[str, Result], labels: dict[str, str]) -> str:
     )
 
 
-def _report(
-    results: dict[str, Result],
-    labels: dict[str, str],
-    rows: list[dict[str, Any]],
-    info: dict[str, Any],
-) -> str:
-    nx, ny = info["divisions"]
-    lines = [
-        "# Example 5.3: wear at t = 1 on four time partitions",
-        "",
-        "Wu, Wang, Han, Section 5, Example 5.3 (paper Fig. 6). Data set mu = 0.2, kappa = 2, "
-        f"v* = (1, 0); {nx} x {ny} squares (h = 1/{ny}); solver `{info['solver']}`; "
-        f"wall time {info['elapsed']:.2f} s.",
-        "",
-        "| grid | partition | levels | max w(T) | at x | worn area sum(omega w) "
-        "| max iterations | max KKT residual |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for name, r in results.items():
-        wT = r.wear[-1]
-        a = int(np.argmax(wT))
-        area = float(np.dot(r.problem.contact.weights, wT))
-        lines.append(
-            f"| {name} | {labels[name]} | {len(r.t)} | {wT.max():.6g} "
-            f"| {r.contact_points[a, 0]:.4g} | {area:.6g} | {int(r.iterations.max())} "
-            f"| {float(r.residuals.max()):.2e} |"
-        )
+def first_order_note(rows: Sequence[dict[str, Any]]) -> str:
+    """How the differences scale with the step (a first-order method gives 3 and 2).
+
+    For ``w_k(T) = w(T) + C k``: ``|w_16 - w_64| / |w_32 - w_64| = 3`` and
+    ``|w_16 - w_32| / |w_32 - w_64| = 2`` (steps 1/16, 1/32, 1/64).
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        The rows of :func:`differences`.
+    """
+    d = {(r["a"], r["b"]): r["max_abs"] for r in rows}
+    try:
+        r1 = d[("k64", "k16")] / d[("k64", "k32")]
+        r2 = d[("k32", "k16")] / d[("k64", "k32")]
+    except (KeyError, ZeroDivisionError):
+        return ""
+    return (
+        f"Differences to the uniform k = 1/64 run: the k = 1/16 one is {r1:.2f} times the "
+        f"k = 1/32 one, and k = 1/16 vs 1/32 is {r2:.2f} times k = 1/32 vs 1/64; a method "
+        "of first order in k (the left rectangle rule 3.22) gives 3 and 2."
+    )
+
+
+# ----------------------------------------------------------------------------- the example
+def _labels(params: Mapping[str, Any]) -> dict[str, str]:
+    return {name: lab for name, (lab, _g) in time_grids(params["base_steps"]).items()}
+
+
+def _analyse(ctx: Context) -> dict[str, Any]:
+    rows = differences(ctx.results)
+    return {
+        "differences": rows,
+        "max_rel_diff": max(r["rel"] for r in rows),
+        "max_wear": {n: float(r.wear[-1].max()) for n, r in ctx.results.items()},
+        "labels": _labels(ctx.params),
+    }
+
+
+def _setup(ctx: Context) -> str:
+    nx, ny = ctx.params["divisions"]
+    return (
+        "Paper Fig. 6. Data set mu = 0.2, kappa = 2, v* = (1, 0); "
+        f"{nx} x {ny} squares (h = 1/{ny}); solver `{ctx.solver.method}`; "
+        f"wall time {ctx.elapsed():.2f} s."
+    )
+
+
+def _differences_section(ctx: Context) -> list[str]:
+    rows, labels = ctx.details["differences"], ctx.details["labels"]
     worst = max(rows, key=lambda r: r["rel"])
-    lines += [
-        "",
+    return [
         "## Pairwise differences of w(T)",
         "",
         "max abs diff = max over contact nodes of |w_a(T) - w_b(T)|; relative = that divided "
@@ -247,29 +287,107 @@ def _report(
         differences_markdown(rows, labels),
         f"Largest relative difference: {worst['rel']:.2%} ({labels[worst['a']]} vs "
         f"{labels[worst['b']]}). The wear update (3.22) is first order in k, so the "
-        "differences grow with the difference of the step sizes. " + _between(results, labels),
-        "",
-        "## Files",
-        "",
-        "- `fig6.png`: w at t = 1 for the four partitions (paper Fig. 6).",
-        "- `wear_differences.md`, `wear_differences.csv`: the table above.",
-        "- `" + "/`, `".join(results) + "/`: the output of `vemwear run` for each partition.",
+        "differences grow with the difference of the step sizes. " + _between(ctx.results, labels),
         "",
     ]
-    return "\n".join(lines)
 
 
-def run(
-    outdir: str | Path,
-    *,
-    solver: SolverOptions | str = "newton",
-    divisions: tuple[int, int] = DIVISIONS,
-    base_steps: int = BASE_STEPS,
-    progress: bool = False,
-    figures: bool = True,
-    vtk: bool = True,
-    log: Callable[[str], None] | None = None,
-) -> ExampleRun:
+def _fig6(ctx: Context, path: Path) -> None:
+    from ..post import compare_profiles
+
+    labels = ctx.details["labels"]
+    compare_profiles(
+        {labels[n]: r for n, r in ctx.results.items()},
+        T,
+        "wear",
+        path,
+        title=f"{TITLE}: wear at t = {T:g} (paper Fig. 6)",
+    )
+
+
+def _paper_section(out: Path, sub: str, run: ExampleRun) -> list[str]:
+    d = run.details
+    rows = d.get("differences", [])
+    labels = d.get("labels", {})
+    return [
+        "## Example 5.3: wear at t = 1 on four time partitions (paper Fig. 6)",
+        "",
+        f"Report: [{sub}/example_5_3.md]({sub}/example_5_3.md). Wall time {run.elapsed:.1f} s.",
+        "",
+        "| partition | our max w(1) |",
+        "|---|---|",
+        *[f"| {labels.get(n, n)} | {num(v, '.6g')} |" for n, v in d.get("max_wear", {}).items()],
+        "",
+        "Pairwise differences of w(1) (largest nodal difference, absolute and relative to the "
+        "larger maximum):",
+        "",
+        differences_markdown(rows, labels) if rows else "(none)",
+        f"The paper says the four curves are similar (Fig. 6, no numbers). Ours differ by at "
+        f"most {num(100 * d.get('max_rel_diff', float('nan')), '.2f')} %. "
+        + first_order_note(rows),
+        "",
+        "Figures:",
+        "",
+        *links(out, sub),
+        "",
+    ]
+
+
+def _check(params: Mapping[str, Any]) -> None:
+    time_grids(params["base_steps"])  # raises for an invalid base_steps
+
+
+EXAMPLE = Example(
+    name=NAME,
+    heading="wear at t = 1 on four time partitions",
+    parameters={"divisions": DIVISIONS, "base_steps": BASE_STEPS},
+    problems=problems,
+    check=_check,
+    setup=_setup,
+    runs_description="the output of `vemwear run` for each partition.",
+    run_label=lambda ctx, name, pr: (
+        f"{name}: {_labels(ctx.params)[name]} ({pr.time.n_steps} steps)"
+    ),
+    run_extra=lambda ctx, name, pr: {
+        "grid": name,
+        "partition": _labels(ctx.params)[name],
+        "data": {"mu": MU, "kappa": KAPPA},
+        "divisions": list(ctx.params["divisions"]),
+    },
+    analyse=_analyse,
+    columns=(
+        Column("grid", lambda ctx, n, r: n),
+        Column("partition", lambda ctx, n, r: ctx.details["labels"][n]),
+        Column("levels", lambda ctx, n, r: str(len(r.t))),
+        Column("max w(T)", lambda ctx, n, r: f"{r.wear[-1].max():.6g}"),
+        Column("at x", lambda ctx, n, r: f"{r.contact_points[int(np.argmax(r.wear[-1])), 0]:.4g}"),
+        Column(
+            "worn area sum(omega w)",
+            lambda ctx, n, r: f"{float(np.dot(r.problem.contact.weights, r.wear[-1])):.6g}",
+        ),
+        Column("max iterations", lambda ctx, n, r: str(int(r.iterations.max()))),
+        Column("max KKT residual", lambda ctx, n, r: f"{float(r.residuals.max()):.2e}"),
+    ),
+    sections=(_differences_section,),
+    outputs=(
+        text_output(
+            "wear_differences.md",
+            "the table of pairwise differences above.",
+            lambda ctx: differences_markdown(ctx.details["differences"], ctx.details["labels"]),
+        ),
+        text_output(
+            "wear_differences.csv",
+            "the same as CSV.",
+            lambda ctx: differences_csv(ctx.details["differences"]),
+        ),
+        OutputFile("fig6.png", "w at t = 1 for the four partitions (paper Fig. 6).", _fig6, True),
+    ),
+    headlines={"max_rel_diff": lambda ctx: ctx.details["max_rel_diff"]},
+    paper_section=_paper_section,
+)
+
+
+def run(outdir: str | Path, **options: Any) -> ExampleRun:
     """Solve the four partitions and write everything into the existing directory ``outdir``.
 
     Writes ``k64/``, ``alt128/``, ``k32/``, ``k16/`` (the standard output of
@@ -281,14 +399,10 @@ def run(
     ----------
     outdir : path
         An existing directory.
-    solver : SolverOptions or str
-        Step solver (default: condensed Newton).
-    divisions : (int, int)
-        Squares in x and y (paper: 32 x 16).
-    base_steps : int
-        See :func:`time_grids` (paper: 64).
-    progress, figures, vtk, log
-        As for :func:`vemwear.paper.ex52.run`.
+    **options
+        ``divisions`` (paper: 32 x 16) and ``base_steps`` (:func:`time_grids`; paper:
+        64), and the driver's ``solver``, ``progress``, ``figures``, ``vtk``, ``log``
+        (:func:`vemwear.paper.driver.run_example`).
 
     Returns
     -------
@@ -296,62 +410,4 @@ def run(
         ``details``: ``differences`` (the rows of :func:`differences`), ``max_rel_diff``,
         ``max_wear`` by grid and ``labels``.
     """
-    t0 = time.perf_counter()
-    out = Path(outdir)
-    opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
-    grids = time_grids(base_steps)
-    labels = {name: lab for name, (lab, _g) in grids.items()}
-    probs = problems(divisions=divisions, base_steps=base_steps)
-    results: dict[str, Result] = {}
-    files: list[str] = []
-    for name, pr in probs.items():
-        if log is not None:
-            log(f"{TITLE}, {name}: {labels[name]} ({pr.time.n_steps} steps)")
-        res = simulate(pr, opts, progress=progress)
-        results[name] = res
-        sub = out / name
-        sub.mkdir(parents=True, exist_ok=True)
-        extra = {
-            "example": NAME,
-            "grid": name,
-            "partition": labels[name],
-            "data": {"mu": MU, "kappa": KAPPA},
-            "divisions": list(divisions),
-        }
-        w = write_outputs(res, sub, times=(T,), figures=figures, vtk=vtk, extra=extra)
-        files += [f"{name}/{f}" for group in w.values() for f in group]
-    rows = differences(results)
-    (out / "wear_differences.md").write_text(differences_markdown(rows, labels), encoding="utf-8")
-    (out / "wear_differences.csv").write_text(differences_csv(rows), encoding="utf-8")
-    files += ["wear_differences.md", "wear_differences.csv"]
-    if figures:
-        from .. import post
-
-        post.compare_profiles(
-            {labels[n]: r for n, r in results.items()},
-            T,
-            "wear",
-            out / "fig6.png",
-            title=f"{TITLE}: wear at t = {T:g} (paper Fig. 6)",
-        )
-        files.append("fig6.png")
-    elapsed = time.perf_counter() - t0
-    info = {"divisions": tuple(divisions), "solver": opts.method, "elapsed": elapsed}
-    report = out / "example_5_3.md"
-    report.write_text(_report(results, labels, rows, info), encoding="utf-8")
-    files.append(report.name)
-    details = {
-        "differences": rows,
-        "max_rel_diff": max(r["rel"] for r in rows),
-        "max_wear": {n: float(r.wear[-1].max()) for n, r in results.items()},
-        "labels": labels,
-    }
-    return ExampleRun(
-        name=NAME,
-        outdir=out,
-        results=results,
-        files=files,
-        report=report,
-        details=details,
-        elapsed=time.perf_counter() - t0,
-    )
+    return run_example(EXAMPLE, outdir, **options)

@@ -7,7 +7,7 @@ h = k = 1/4, 1/8, ..., 1/64, against the reference solution h = k = 1/256
 use Example 5.3's (= Example 5.2's data set 1): mu = 0.2, kappa = 2, v* = (1, 0),
 the data set of every other single-data-set example of the paper (5.3, 5.4).
 
-Errors (:mod:`vemwear.post.compare`; docs/paper.md), relative, at the common time
+Errors (:mod:`vemwear.post.compare`; docs/method.md), relative, at the common time
 levels (the levels of the coarse grid; all of them are reference levels):
 
 - displacement (Table 1), column ``u_H1``: each solution projected by its own ``Pi``
@@ -20,46 +20,44 @@ levels (the levels of the coarse grid; all of them are reference levels):
 at t = T (the tables) and as the maximum over the common levels; secondary variants in
 ``errors.csv`` (:mod:`vemwear.paper.ex55_tables`). Orders are log2 of the ratios of
 successive errors. :mod:`vemwear.paper.ex55_study` splits the wear error into its
-space and time parts.
+space and time parts. The headline numbers are the first rows (h = k = 1/4) of
+Tables 1 and 2.
 
 The reference is computed with ``simulate(..., store=[common times])`` so that only
 the needed displacements are recovered, and cached on disk (``.npz`` plus a ``.json``
 with the hash of its inputs) in a cache directory; it is reused whenever its inputs
-(problem data, reference size, solver method and tolerance, vemwear version) did not
+(the problem's fingerprint, reference size, solver method and tolerance) did not
 change and it holds the displacement at every needed time.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
-import tempfile
-import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from .. import __version__
-from ..post.compare import Comparison, ErrorHistory, Solution
-from ..simulate import Problem, Result, SolverOptions, simulate
-from . import ExampleRun, ex52
+from ..post.compare import Comparison, Solution
+from ..simulate import Problem, SolverOptions
+from . import DESCRIPTIONS, ExampleRun, ex52
+from . import ex55_report as R
+from .driver import run_example
+from .ex55_reference import CACHE_FORMAT, cache_key, cached_solution, default_cache_dir
 from .ex55_tables import (
     PAPER_TABLE1,
     PAPER_TABLE2,
     error_tables,
     paper_ratios,
-    plot_tables,
     tables_csv,
     tables_markdown,
 )
+from .spec import Context, Example, OutputFile, text_output
 
 __all__ = [
     "CACHE_FORMAT",
     "DESCRIPTION",
+    "EXAMPLE",
     "KAPPA",
     "LEVELS",
     "MU",
@@ -83,22 +81,27 @@ __all__ = [
 ]
 
 NAME = "5.5"
-TITLE = "Example 5.5"
-DESCRIPTION = (
-    "relative errors and orders for h = k = 1/4 ... 1/64 against h = k = 1/256 "
-    "(paper Tables 1 and 2)"
-)
+TITLE = f"Example {NAME}"
+DESCRIPTION = DESCRIPTIONS[NAME]
 
 # not stated for 5.5 in the paper: Example 5.3's data (Example 5.2's data set 1)
 MU, KAPPA = ex52.DATA_SETS["set1"]["mu"], ex52.DATA_SETS["set1"]["kappa"]
 LEVELS: tuple[int, ...] = (4, 8, 16, 32, 64)  # 1/h = 1/k
 REFERENCE: int = 256
+#: The reference and levels of ``vemwear paper --quick``.
+QUICK_REFERENCE: int = 64
 T = ex52.T
-CACHE_FORMAT = "vemwear-ex55-reference/1"
 
 
 def check_sizes(levels: Sequence[int], reference: int) -> tuple[tuple[int, ...], int]:
     """Validate the mesh levels and the reference size (all as ``1/h``).
+
+    Parameters
+    ----------
+    levels : sequence of int
+        ``1/h`` of the coarse levels.
+    reference : int
+        ``1/h`` of the reference.
 
     Returns
     -------
@@ -129,80 +132,44 @@ def check_sizes(levels: Sequence[int], reference: int) -> tuple[tuple[int, ...],
 
 
 def problem(n: int, steps: int | None = None) -> Problem:
-    """The problem with h = 1/n ((2n) x n squares) and ``steps`` uniform steps on [0, 1]
-    (default n: k = h, the paper's choice)."""
+    """The problem with h = 1/n ((2n) x n squares) and ``steps`` uniform steps on [0, 1].
+
+    Parameters
+    ----------
+    n : int
+        ``1/h``.
+    steps : int, optional
+        Uniform time steps (default ``n``: k = h, the paper's choice).
+    """
     return ex52.problem(MU, KAPPA, divisions=(2 * n, n), steps=n if steps is None else steps)
 
 
 def problems(*, levels: Sequence[int] = LEVELS) -> dict[str, Problem]:
-    """The coarse problems by name (``h4``, ``h8``, ...)."""
+    """The coarse problems by name (``h4``, ``h8``, ...).
+
+    Parameters
+    ----------
+    levels : sequence of int
+        ``1/h = 1/k`` of each (paper: 4, 8, 16, 32, 64).
+    """
     return {f"h{n}": problem(n) for n in levels}
 
 
 def common_times(levels: Sequence[int], T_: float = T) -> list[float]:
-    """The union of the time levels ``j T / n`` of every level ``n`` (exact fractions)."""
+    """The union of the time levels ``j T / n`` of every level ``n`` (exact fractions).
+
+    Parameters
+    ----------
+    levels : sequence of int
+        ``1/k`` of each uniform grid on [0, T].
+    T_ : float
+        The final time.
+    """
     s = {Fraction(j, n) for n in levels for j in range(n + 1)}
     return [float(f) * T_ for f in sorted(s)]
 
 
-# ----------------------------------------------------------------------------- reference cache
-def default_cache_dir(outdir: str | os.PathLike[str]) -> Path:
-    """``OUTDIR/../.vemwear-cache``."""
-    return Path(outdir).absolute().parent / ".vemwear-cache"
-
-
-def _solver_desc(opts: SolverOptions) -> dict[str, Any]:
-    return {"method": opts.method, "tol": opts.tol, "max_iter": opts.max_iter}
-
-
-def cache_key(reference: int, solver: SolverOptions) -> tuple[str, dict[str, Any]]:
-    """The hash (hex SHA-256) and the JSON inputs identifying a reference run.
-
-    The inputs are the format tag, the vemwear version, ``1/h``, the problem's
-    description (mesh sizes, material, time grid, loads, contact law and data) and
-    the solver method, tolerance and iteration limit (not the linear algebra
-    backend: it does not change the solution beyond the tolerance).
-    """
-    inputs = {
-        "format": CACHE_FORMAT,
-        "vemwear": __version__,
-        "reference": int(reference),
-        "problem": problem(reference).describe(),
-        "solver": _solver_desc(solver),
-    }
-    text = json.dumps(inputs, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest(), inputs
-
-
-def _atomic_write(path: Path, write: Callable[[Any], None], mode: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.tmp-")
-    try:
-        with os.fdopen(fd, mode) as fh:
-            write(fh)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def _load_cached(npz: Path, meta: Path, key: str, times: Sequence[float]) -> Solution | None:
-    if not (npz.exists() and meta.exists()):
-        return None
-    try:
-        info = json.loads(meta.read_text(encoding="utf-8"))
-        if info.get("hash") != key:
-            return None
-        with np.load(npz, allow_pickle=False) as data:
-            sol = Solution.from_arrays({k: data[k] for k in data.files})
-    except (OSError, ValueError, KeyError):
-        return None
-    stored = sol.t[sol.u_levels]
-    if not all(np.any(np.isclose(stored, t, rtol=0, atol=1e-9)) for t in times):
-        return None
-    return sol
-
-
+# ----------------------------------------------------------------------------- reference
 def reference_solution(
     reference: int,
     times: Sequence[float],
@@ -217,10 +184,11 @@ def reference_solution(
     Parameters
     ----------
     reference : int
-        ``1/h`` of the reference.
+        ``1/h = 1/k`` of the reference.
     times : sequence of float
         Times at which its displacement is needed (levels of its grid).
     solver : SolverOptions or str
+        The step solver.
     cache_dir : path, optional
         Where ``ex55_reference_h{n}_{hash}.npz`` / ``.json`` live; ``None``: no cache.
     progress : bool
@@ -231,173 +199,171 @@ def reference_solution(
     Returns
     -------
     (Solution, dict)
-        The reference, and ``{"cached": bool, "elapsed": s of the run (or of the
-        original run when cached), "hash", "npz", "unknowns", "timings"}``.
+        As :func:`vemwear.paper.ex55_reference.cached_solution`.
     """
     opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
-    key, inputs = cache_key(reference, opts)
-    npz = meta = None
-    if cache_dir is not None:
-        cdir = Path(cache_dir)
-        stem = f"ex55_reference_h{reference}_{key[:16]}"
-        npz, meta = cdir / f"{stem}.npz", cdir / f"{stem}.json"
-        sol = _load_cached(npz, meta, key, times)
-        if sol is not None:
-            info = json.loads(meta.read_text(encoding="utf-8"))
-            if log is not None:
-                log(f"{TITLE}: reference h = k = 1/{reference} from the cache {npz}")
-            return sol, {
-                "cached": True,
-                "elapsed": info.get("elapsed"),
-                "hash": key,
-                "npz": str(npz),
-                "unknowns": info.get("unknowns"),
-                "timings": info.get("timings", {}),
-            }
-    pr = problem(reference)
-    if log is not None:
-        log(
-            f"{TITLE}: reference h = k = 1/{reference} ({2 * pr.mesh.n_points} unknowns, "
-            f"{reference} steps), storing u at {len(times)} levels"
+    return cached_solution(
+        problem(reference),
+        reference,
+        times,
+        solver=opts,
+        cache_dir=cache_dir,
+        progress=progress,
+        log=log,
+        label=f"{TITLE}: reference h = k = 1/{reference}",
+    )
+
+
+# ----------------------------------------------------------------------------- the example
+def _check(params: Mapping[str, Any]) -> None:
+    check_sizes(params["levels"], params["reference"])
+
+
+def _prepare(ctx: Context) -> None:
+    lv, ref = check_sizes(ctx.params["levels"], ctx.params["reference"])
+    cache = ctx.params["cache"]
+    cache_dir = (
+        default_cache_dir(ctx.outdir)
+        if cache is True
+        else (None if cache is False or cache is None else Path(cache))
+    )
+    sol, info = reference_solution(
+        ref,
+        common_times(lv),
+        solver=ctx.solver,
+        cache_dir=cache_dir,
+        progress=ctx.progress,
+        log=ctx.log,
+    )
+    ctx.state.update(levels=lv, reference=ref, reference_info=info, histories={})
+    ctx.state["comparison"] = Comparison(sol)
+
+
+def _after_run(ctx: Context, name: str, res: Any) -> None:
+    ctx.state["histories"][int(name[1:])] = ctx.state["comparison"].errors(res)
+
+
+def _analyse(ctx: Context) -> dict[str, Any]:
+    st = ctx.state
+    tables = error_tables(st["histories"])
+    study = None
+    if ctx.params["study"]:
+        from .ex55_study import wear_error_study
+
+        study = wear_error_study(
+            levels=st["levels"],
+            reference=st["reference"],
+            solver=ctx.solver,
+            comparison=st["comparison"],
+            coarse=ctx.results,
+            log=ctx.log,
         )
-    t0 = time.perf_counter()
-    res = simulate(pr, opts, progress=progress, store=list(times))
-    elapsed = time.perf_counter() - t0
-    sol = Solution.from_result(res)
-    extra = {
-        "cached": False,
-        "elapsed": elapsed,
-        "hash": key,
-        "unknowns": 2 * pr.mesh.n_points,
-        "timings": dict(res.timings),
-        "max_iterations": int(res.iterations.max()),
-        "max_residual": float(res.residuals.max()),
+    return {
+        "mu": MU,
+        "kappa": KAPPA,
+        "tables": tables,
+        "reference": st["reference"],
+        "reference_info": st["reference_info"],
+        "levels": list(st["levels"]),
+        "paper": {"table1": PAPER_TABLE1, "table2": PAPER_TABLE2},
+        "ratios": paper_ratios(tables),
+        "study": study,
+        "summary": tables_markdown(tables, st["reference"]).splitlines(),
     }
-    if npz is not None and meta is not None:
-        npz.parent.mkdir(parents=True, exist_ok=True)
-        arrays = sol.arrays()
-        _atomic_write(npz, lambda fh: np.savez(fh, **arrays), "wb")
-        record = {
-            "hash": key,
-            "inputs": inputs,
-            "elapsed": elapsed,
-            "unknowns": extra["unknowns"],
-            "timings": extra["timings"],
-            "stored_times": [float(t) for t in sol.t[sol.u_levels]],
-            "created": time.strftime("%Y-%m-%dT%H:%M:%S"),
-        }
-        _atomic_write(meta, lambda fh: json.dump(record, fh, indent=1), "w")
-        extra["npz"] = str(npz)
-        if log is not None:
-            log(f"{TITLE}: reference cached in {npz}")
-    return sol, extra
 
 
-# ----------------------------------------------------------------------------- driver
-def _ratio_lines(tables: dict[str, Any]) -> list[str]:
-    """One line per table: the range of ours / paper."""
-    out = []
-    for key, name in (("u_H1", "Table 1"), ("w_L2", "Table 2")):
-        r = [x for x in paper_ratios(tables)[key] if np.isfinite(x)]
-        if r:
-            out.append(
-                f"- {name}: ours / paper = "
-                + ", ".join(f"{x:.3f}" for x in r)
-                + f" (range {min(r):.3f}-{max(r):.3f})."
-            )
-    return [*out, ""] if out else []
+def _table(number: int) -> Callable[[Context], str]:
+    def render(ctx: Context) -> str:
+        md = tables_markdown(ctx.details["tables"], ctx.details["reference"])
+        t1, t2 = md.split("### Table 2")
+        return (t1 if number == 1 else "### Table 2" + t2).strip() + "\n"
+
+    return render
 
 
-def _report(tables: dict[str, Any], info: dict[str, Any], study_lines: Sequence[str] = ()) -> str:
-    ref = info["reference"]
-    r = info["reference_info"]
-    how = "read from the cache" if r["cached"] else "computed in this run"
-    el = r.get("elapsed")
-    lines = [
-        "# Example 5.5: convergence against a reference solution",
-        "",
-        "Wu, Wang, Han, Section 5, Example 5.5 (Tables 1 and 2). Omega = (0, 2) x (0, 1), "
-        "squares with Gamma_C in 2/h parts, uniform steps k = h, T = 1, data of Example 5.2 "
-        f"with mu = {MU:g}, kappa = {KAPPA:g} (not stated in the paper for 5.5; Example 5.3's "
-        "data set 1).",
-        "",
-        f"Reference: h = k = 1/{ref} ({r.get('unknowns')} unknowns), {how}"
-        + (f"; its run took {el:.1f} s" if isinstance(el, (int, float)) else "")
-        + ". "
-        f"Solver `{info['solver']}`; wall time of this example {info['elapsed']:.1f} s.",
-        "",
-        "Errors are relative, at t = T (the maximum over the coarse time levels as a "
-        "secondary row). Displacement (Table 1, column `u_H1`): each solution is projected by "
-        "its own Pi (3.8)-(3.10) on its own mesh, a linear field per cell, and the difference "
-        "of the two piecewise linear fields is integrated exactly over the cells of the "
-        "reference mesh (every reference cell lies in one coarse cell): "
-        "||Pi_h u_h - Pi_ref u_ref||_H1 / ||Pi_ref u_ref||_H1, full H1 norm. Wear (Table 2, "
-        "column `w_L2`): ||w_h - w_ref||_L2(Gamma_C) / ||w_ref||_L2(Gamma_C), both piecewise "
-        "linear along Gamma_C, integrated exactly over the reference's contact edges. "
-        "Secondary variants (in `errors.csv`): the seminorm; `I_h u_ref`, the reference at "
-        "the coarse vertices, compared on the coarse mesh (blind to u_ref - I_h u_ref); the "
-        "coarse vertex values carried to the reference mesh by mean value coordinates.",
-        "",
-        tables_markdown(tables, ref),
-        *_ratio_lines(tables),
-        *study_lines,
-        "## Files",
-        "",
-        "- `table1.md`, `table2.md`, `errors.csv`: the tables (every variant in the CSV).",
-        *(
-            ["- `table2_study.md`: the space / time split of the wear error."]
-            if study_lines
-            else []
+def _study_md(ctx: Context) -> str:
+    from .ex55_study import study_markdown
+
+    return study_markdown(ctx.details["study"])
+
+
+def _convergence(ctx: Context, path: Path) -> None:
+    from .ex55_tables import plot_tables
+
+    plot_tables(ctx.details["tables"], ctx.details["reference"], path, TITLE)
+
+
+EXAMPLE = Example(
+    name=NAME,
+    heading="convergence against a reference solution",
+    parameters={"levels": LEVELS, "reference": REFERENCE, "cache": True, "study": False},
+    quick={
+        "reference": QUICK_REFERENCE,
+        "levels": tuple(n for n in LEVELS if n < QUICK_REFERENCE),
+    },
+    problems=problems,
+    check=_check,
+    prepare=_prepare,
+    after_run=_after_run,
+    analyse=_analyse,
+    setup=R.setup,
+    sections=(R.errors_section,),
+    runs_description="`result.npz` and `summary.json` of every coarse run.",
+    run_label=lambda ctx, name, pr: f"{name}: h = k = 1/{name[1:]}",
+    run_extra=lambda ctx, name, pr: {"inv_h": int(name[1:]), "data": {"mu": MU, "kappa": KAPPA}},
+    run_figures=False,
+    vtk=False,
+    store="all",
+    outputs=(
+        text_output("table1.md", "Table 1, ours beside the paper's.", _table(1)),
+        text_output("table2.md", "Table 2, ours beside the paper's.", _table(2)),
+        text_output(
+            "errors.csv",
+            "every error variant and its order, with the paper's numbers.",
+            lambda ctx: tables_csv(ctx.details["tables"]),
         ),
-        "- `convergence.png`: log-log plot of the errors, with the paper's.",
-        "- `h4/`, `h8/`, ...: `result.npz` and `summary.json` of every coarse run.",
-        "",
-    ]
-    return "\n".join(lines)
+        OutputFile(
+            "convergence.png",
+            "log-log plot of the errors, with the paper's.",
+            _convergence,
+            figure=True,
+        ),
+        OutputFile(
+            "table2_study.md",
+            "the space / time split of the wear error.",
+            lambda ctx, path: path.write_text(_study_md(ctx), encoding="utf-8"),
+            when=lambda ctx: ctx.details["study"] is not None,
+        ),
+    ),
+    headlines={
+        "u_H1.h4": lambda ctx: R.first_row(ctx, "u_H1"),
+        "w_L2.h4": lambda ctx: R.first_row(ctx, "w_L2"),
+    },
+    paper_section=R.paper_section,
+)
 
 
-def run(
-    outdir: str | Path,
-    *,
-    solver: SolverOptions | str = "newton",
-    levels: Sequence[int] = LEVELS,
-    reference: int = REFERENCE,
-    cache: str | os.PathLike[str] | bool | None = True,
-    progress: bool = False,
-    figures: bool = True,
-    vtk: bool = False,
-    study: bool = False,
-    log: Callable[[str], None] | None = None,
-) -> ExampleRun:
+def run(outdir: str | Path, **options: Any) -> ExampleRun:
     """Compute Tables 1 and 2 and write them into the existing directory ``outdir``.
 
     Writes ``h{n}/`` for every level (``result.npz``, ``summary.json``; the VTK series if
-    asked), ``table1.md``, ``table2.md``, ``errors.csv``, ``convergence.png`` and
-    ``example_5_5.md``.
+    asked), ``table1.md``, ``table2.md``, ``errors.csv``, ``convergence.png``,
+    ``table2_study.md`` (with ``study=True``) and ``example_5_5.md``.
 
     Parameters
     ----------
     outdir : path
         An existing directory.
-    solver : SolverOptions or str
-        Step solver of every run (default: condensed Newton).
-    levels : sequence of int
-        ``1/h = 1/k`` of the coarse runs (paper: 4, 8, 16, 32, 64).
-    reference : int
-        ``1/h = 1/k`` of the reference (paper: 256); must be a multiple of every level.
-    cache : path, True, False or None
-        Cache directory of the reference; ``True``: :func:`default_cache_dir` of
-        ``outdir``; ``False`` / ``None``: no cache.
-    progress, log
-        As for :func:`vemwear.paper.ex52.run`.
-    figures : bool
-        Write ``convergence.png`` (the coarse runs get no figures).
-    vtk : bool
-        Write the VTK series of the coarse runs (off by default).
-    study : bool
-        Also split the wear error into its space and time parts
-        (:func:`vemwear.paper.ex55_study.wear_error_study`, reusing the reference) and
-        write ``table2_study.md``.
+    **options
+        The example's parameters: ``levels`` (``1/h = 1/k`` of the coarse runs; paper:
+        4, 8, 16, 32, 64), ``reference`` (``1/h = 1/k`` of the reference; paper: 256; a
+        multiple of every level), ``cache`` (cache directory of the reference; True:
+        :func:`default_cache_dir` of ``outdir``; False or None: no cache), ``study``
+        (also split the wear error into its space and time parts,
+        :func:`vemwear.paper.ex55_study.wear_error_study`, reusing the reference); and
+        the driver's ``solver``, ``progress``, ``figures`` (``convergence.png``; the
+        coarse runs get no figures), ``vtk`` (off by default), ``log``
+        (:func:`vemwear.paper.driver.run_example`).
 
     Returns
     -------
@@ -405,82 +371,6 @@ def run(
         ``results``: the coarse runs by name (``h4``, ...); ``details``: ``tables``
         (:func:`~vemwear.paper.ex55_tables.error_tables`), ``ratios`` (ours / paper),
         ``reference`` (1/h), ``reference_info`` (cached?, its run time), ``paper``
-        (Tables 1 and 2) and ``study`` (or None).
+        (Tables 1 and 2), ``study`` (or None) and ``summary`` (the tables' lines).
     """
-    t0 = time.perf_counter()
-    out = Path(outdir)
-    lv, ref = check_sizes(levels, reference)
-    opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
-    if cache is True:
-        cache_dir: Path | None = default_cache_dir(out)
-    elif cache is False or cache is None:
-        cache_dir = None
-    else:
-        cache_dir = Path(cache)
-    times = common_times(lv)
-    ref_sol, ref_info = reference_solution(
-        ref, times, solver=opts, cache_dir=cache_dir, progress=progress, log=log
-    )
-    results: dict[str, Result] = {}
-    histories: dict[int, ErrorHistory] = {}
-    comparison = Comparison(ref_sol)
-    files: list[str] = []
-    from ..post.outputs import write_outputs
-
-    for n in lv:
-        name = f"h{n}"
-        if log is not None:
-            log(f"{TITLE}, {name}: h = k = 1/{n}")
-        res = simulate(problem(n), opts, progress=progress, store="all")
-        results[name] = res
-        histories[n] = comparison.errors(res)
-        sub = out / name
-        sub.mkdir(parents=True, exist_ok=True)
-        extra = {"example": NAME, "inv_h": n, "data": {"mu": MU, "kappa": KAPPA}}
-        w = write_outputs(res, sub, times=(T,), figures=False, vtk=vtk, extra=extra)
-        files += [f"{name}/{f}" for group in w.values() for f in group]
-    tables = error_tables(histories)
-    md = tables_markdown(tables, ref)
-    t1, t2 = md.split("### Table 2")
-    (out / "table1.md").write_text(t1.strip() + "\n", encoding="utf-8")
-    (out / "table2.md").write_text(("### Table 2" + t2).strip() + "\n", encoding="utf-8")
-    (out / "errors.csv").write_text(tables_csv(tables), encoding="utf-8")
-    files += ["table1.md", "table2.md", "errors.csv"]
-    if figures:
-        plot_tables(tables, ref, out / "convergence.png", TITLE)
-        files.append("convergence.png")
-    study_result: dict[str, Any] | None = None
-    study_lines: list[str] = []
-    if study:
-        from .ex55_study import study_markdown, wear_error_study
-
-        study_result = wear_error_study(
-            levels=lv, reference=ref, solver=opts, comparison=comparison, coarse=results, log=log
-        )
-        study_lines = study_markdown(study_result).splitlines()
-        (out / "table2_study.md").write_text("\n".join(study_lines) + "\n", encoding="utf-8")
-        files.append("table2_study.md")
-    elapsed = time.perf_counter() - t0
-    info = {"reference": ref, "reference_info": ref_info, "solver": opts.method, "elapsed": elapsed}
-    report = out / "example_5_5.md"
-    report.write_text(_report(tables, info, study_lines), encoding="utf-8")
-    files.append(report.name)
-    details = {
-        "tables": tables,
-        "reference": ref,
-        "reference_info": ref_info,
-        "levels": list(lv),
-        "paper": {"table1": PAPER_TABLE1, "table2": PAPER_TABLE2},
-        "ratios": paper_ratios(tables),
-        "study": study_result,
-        "summary": md.splitlines(),
-    }
-    return ExampleRun(
-        name=NAME,
-        outdir=out,
-        results=results,
-        files=files,
-        report=report,
-        details=details,
-        elapsed=time.perf_counter() - t0,
-    )
+    return run_example(EXAMPLE, outdir, **options)

@@ -2,7 +2,7 @@
 
 The columns of ``errors.csv`` (:data:`COLUMNS`) are the variants of
 :mod:`vemwear.post.compare`: ``u_H1`` and ``w_L2`` (at t = T) are the primary errors, the
-paper's definitions (docs/paper.md); the others are secondary.
+paper's definitions (docs/method.md, section 7); the others are secondary.
 """
 
 from __future__ import annotations
