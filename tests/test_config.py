@@ -18,7 +18,7 @@ from vemwear.mesh import PARTS, part_code, write_mesh
 from vemwear.paper import ex52
 
 ROOT = Path(__file__).resolve().parents[1]
-EXAMPLES = ROOT / "examples"
+EXAMPLES = ROOT / "src" / "vemwear" / "examples"
 
 BASE = small_config(
     "small",

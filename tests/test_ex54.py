@@ -145,7 +145,7 @@ def test_shared_vertices_are_the_corners_for_unrelated_meshes() -> None:
 
 # ----------------------------------------------------------------------------- Example 5.4
 def test_paper_sizes_and_config_file_builds_the_same_mesh() -> None:
-    cfg = load_config(ROOT / "examples" / "example_5_4_voronoi.toml")
+    cfg = load_config(ROOT / "src" / "vemwear" / "examples" / "example_5_4_voronoi.toml")
     a = cfg.problem
     b = ex54.problems()["voronoi"]
     for key in ("points", "cell_offsets", "cell_vertices", "boundary_tags"):

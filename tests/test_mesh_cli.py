@@ -228,7 +228,15 @@ def test_inspect_counts_validity_quality(
 
 def test_inspect_config_and_untagged(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert (
-        main(["mesh", "inspect", str(ROOT / "examples" / "example_5_2_set1.toml"), "--json"]) == 0
+        main(
+            [
+                "mesh",
+                "inspect",
+                str(ROOT / "src" / "vemwear" / "examples" / "example_5_2_set1.toml"),
+                "--json",
+            ]
+        )
+        == 0
     )
     d = json.loads(capsys.readouterr().out)
     assert d["cells"] == 512 and d["contact_nodes"] == 32 and d["hanging_nodes"] == 0
@@ -278,7 +286,7 @@ def test_plot_mesh_and_quality(tmp_path: Path, capsys: pytest.CaptureFixture[str
             [
                 "mesh",
                 "plot",
-                str(ROOT / "examples" / "example_5_2_set1.toml"),
+                str(ROOT / "src" / "vemwear" / "examples" / "example_5_2_set1.toml"),
                 "-o",
                 str(tmp_path / "c.pdf"),
             ]
@@ -303,7 +311,7 @@ def test_convert_roundtrips(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     np.testing.assert_array_equal(ma.points, mc.points)
     np.testing.assert_array_equal(ma.cell_vertices, mc.cell_vertices)
     np.testing.assert_array_equal(ma.boundary_tags, mc.boundary_tags)
-    cfg = ROOT / "examples" / "example_5_2_set1.toml"
+    cfg = ROOT / "src" / "vemwear" / "examples" / "example_5_2_set1.toml"
     assert main(["mesh", "convert", str(cfg), str(tmp_path / "cfg.msh")]) == 0
     m = read_mesh(tmp_path / "cfg.msh")
     assert m.n_cells == 512 and tags(m) == {"clamped": 16, "traction": 48, "contact": 32}
@@ -384,7 +392,7 @@ def test_bad_input_is_one_line_exit_2(
 ) -> None:
     (tmp_path / "garbage.vtu").write_text("not a mesh\n")
     (tmp_path / "garbage.msh").write_text("not a mesh\n")
-    cfg = (ROOT / "examples" / "example_5_2_set1.toml").read_text()
+    cfg = (ROOT / "src" / "vemwear" / "examples" / "example_5_2_set1.toml").read_text()
     (tmp_path / "bad.toml").write_text(cfg.replace("mu = 0.2", "mu = -0.2"))
     args = [a.replace("{d}", str(tmp_path)) for a in argv]
     assert main(["mesh", *args]) == 2
@@ -431,7 +439,9 @@ def test_config_and_cli_share_the_registry(tmp_path: Path) -> None:
     from vemwear.config.schema import MESH_FORMS
 
     assert set(MESH_FORMS) == {*FAMILIES, "file"}
-    cfg = tomllib.loads((ROOT / "examples" / "example_5_2_set1.toml").read_text())
+    cfg = tomllib.loads(
+        (ROOT / "src" / "vemwear" / "examples" / "example_5_2_set1.toml").read_text()
+    )
     for name, fam in FAMILIES.items():
         seed = 3 if fam.option("seed") else None
         if fam.option("n_cells"):

@@ -18,18 +18,24 @@ from .errors import ConfigError
 
 if TYPE_CHECKING:
     from .build import Config, OutputOptions, load_config, parse_config
+    from .overrides import apply_overrides
     from .reference import config_json_schema, update_reference
 
 __all__ = [
     "Config",
     "ConfigError",
     "OutputOptions",
+    "apply_overrides",
     "config_json_schema",
     "load_config",
     "parse_config",
     "update_reference",
 ]
-_WHERE = {"config_json_schema": "reference", "update_reference": "reference"}
+_WHERE = {
+    "apply_overrides": "overrides",
+    "config_json_schema": "reference",
+    "update_reference": "reference",
+}
 
 
 def __getattr__(name: str) -> Any:

@@ -1,0 +1,126 @@
+"""The shipped example configurations: in the package, run at a small size, overrides."""
+
+from __future__ import annotations
+
+import tomllib
+from importlib.resources import files
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vemwear.config import ConfigError, apply_overrides, parse_config
+from vemwear.examples import config_path, configs
+from vemwear.simulate import SolverOptions, simulate
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Overrides that make each mesh family of the shipped files small.
+SMALL: dict[str, dict[str, object]] = {
+    "squares": {"mesh.divisions": [8, 4], "time.steps": 4},
+    "voronoi": {"mesh.n_cells": 32, "time.steps": 4},
+}
+
+
+def _data(name: str) -> dict[str, object]:
+    return tomllib.loads(config_path(name).read_text(encoding="utf-8"))
+
+
+# ----------------------------------------------------------------------------- shipped
+def test_the_configs_are_package_data() -> None:
+    """Found through importlib.resources: in CI the tests import the installed wheel."""
+    names = list(configs())
+    assert names == sorted(names) and {
+        "example_5_2_set1",
+        "example_5_2_set2",
+        "example_5_2_set3",
+        "example_5_4_voronoi",
+    } <= set(names)
+    for name, f in configs().items():
+        assert f.is_file() and tomllib.loads(f.read_text(encoding="utf-8"))["title"], name
+        assert config_path(name + ".toml") == config_path(name)
+    assert (files("vemwear") / "py.typed").is_file()
+    with pytest.raises(KeyError, match="available: example_5_2_set1"):
+        config_path("example_9")
+
+
+def test_pyproject_ships_every_config_and_the_marker() -> None:
+    """The package-data globs of pyproject.toml cover every shipped file (the wheel's)."""
+    with (ROOT / "pyproject.toml").open("rb") as fh:
+        globs = tomllib.load(fh)["tool"]["setuptools"]["package-data"]["vemwear"]
+    pkg = ROOT / "src" / "vemwear"
+    shipped = {p.relative_to(pkg) for g in globs for p in pkg.glob(g)}
+    wanted = {p.relative_to(pkg) for p in (pkg / "examples").glob("*.toml")}
+    assert wanted and wanted <= shipped
+    assert Path("py.typed") in shipped
+    assert not list((ROOT / "examples").glob("*.toml"))  # one copy of each file
+
+
+@pytest.mark.parametrize("name", list(configs()))
+def test_every_config_runs_at_a_small_size(name: str) -> None:
+    data = _data(name)
+    generator = data["mesh"]["generator"]  # type: ignore[index]
+    assert generator in SMALL, f"{name}: add a small size for generator {generator!r}"
+    small = apply_overrides(data, {**SMALL[generator], "solver.backend": "scipy"})
+    cfg = parse_config(small, source=name)
+    mesh = cfg.problem.mesh
+    assert mesh.n_cells == 32 and len(cfg.problem.time.t) == 5
+    res = simulate(cfg.problem, cfg.solver, store="final")
+    assert res.residuals.max() <= cfg.solver.tol
+    assert np.all(res.wear[-1] >= 0) and res.wear[-1].max() > 0
+    assert cfg.output.times == (0.25, 0.5, 0.75, 1.0)
+
+
+# ----------------------------------------------------------------------------- overrides
+def test_overrides_set_keys_on_a_copy() -> None:
+    data = _data("example_5_2_set1")
+    out = apply_overrides(
+        data,
+        {
+            "time.steps": 8,
+            "mesh.divisions": (8, 4),
+            "contact.p.c": 0.5,
+            "solver.max_iter": 20,
+            "output.vtk": False,
+        },
+    )
+    assert out["time"] == {"T": 1.0, "steps": 8} and out["mesh"]["divisions"] == [8, 4]
+    assert out["contact"]["p"] == {"type": "linear", "c": 0.5}
+    assert out["solver"]["max_iter"] == 20 and out["output"]["vtk"] is False
+    assert data["time"]["steps"] == 64 and data["mesh"]["divisions"] == [32, 16]  # untouched
+    cfg = parse_config(out, source="o")
+    assert cfg.problem.mesh.n_cells == 32 and cfg.solver == SolverOptions(max_iter=20)
+    # a missing section is created; a later key sees an earlier change of form
+    bare = {k: v for k, v in data.items() if k != "solver"}
+    assert apply_overrides(bare, {"solver.tol": 1e-8})["solver"] == {"tol": 1e-8}
+    vor = apply_overrides(data, {"mesh.generator": "voronoi", "mesh.n_cells": 64})
+    assert vor["mesh"]["n_cells"] == 64
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        (
+            {"time.stesp": 3},
+            r"'time.stesp': \[time\] in its 'steps' form has no key 'stesp'; "
+            r"did you mean 'steps'\?",
+        ),
+        ({"materal.lam": 1.0}, "the configuration has no key 'materal'; did you mean 'material'"),
+        ({"mesh.n_cells": 32}, r"\[mesh\] in its 'squares' form has no key 'n_cells'; valid"),
+        ({"contact.p.r": [0.0]}, r"\[contact\] p in its 'linear' form has no key 'r'"),
+        ({"contact.mu.at": [0.0]}, r"\[contact\] mu is a value, not a table"),
+        ({"time..steps": 3}, "is not a dotted key path"),
+    ],
+)
+def test_overrides_name_paths_the_schema_does_not_have(
+    overrides: dict[str, object], message: str
+) -> None:
+    with pytest.raises(ConfigError, match=message):
+        apply_overrides(_data("example_5_2_set1"), overrides)
+
+
+def test_overrides_of_a_voronoi_config_follow_its_generator() -> None:
+    data = _data("example_5_4_voronoi")
+    with pytest.raises(ConfigError, match=r"'voronoi' form has no key 'divisions'"):
+        apply_overrides(data, {"mesh.divisions": [8, 4]})
+    assert apply_overrides(data, {"mesh.seed": 3})["mesh"]["seed"] == 3
