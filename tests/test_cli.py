@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import json
 import subprocess
 import sys
@@ -194,7 +195,7 @@ def test_interrupt_is_130_and_internal_error_is_1(
     monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    import vemwear.simulate as sim
+    sim = importlib.import_module("vemwear.simulate")  # the subpackage, not the function
 
     def interrupted(*args: object, **kwargs: object) -> None:
         raise KeyboardInterrupt

@@ -7,6 +7,7 @@ up by ``vemwear run`` at call time) so that its ``callback`` raises there: a
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import signal
@@ -16,11 +17,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import vemwear.simulate as sim
 from conftest import small_config
 from vemwear.cli.main import main
 from vemwear.cli.resume import CONFIG_COPY, README_NAME, partial_path
 from vemwear.solvers import ConvergenceError
+
+sim = importlib.import_module("vemwear.simulate")  # the subpackage, not the function
 
 STEPS = 40  # > 32: the condensed Newton solver finishes levels in blocks of 32
 

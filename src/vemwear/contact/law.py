@@ -1,8 +1,9 @@
-"""Normal compliance laws ``p(r)`` of the soft layer (paper H(p)).
+"""Normal compliance laws ``p(r)`` of the soft layer (paper H(p), Section 2).
 
-A law is Lipschitz, monotone and zero for ``r <= 0``. Every law gives its
-values, a (generalized) derivative for Newton's method, and its Lipschitz constant
-``L_p`` for the smallness condition of Theorem 3.4.
+A law is Lipschitz, monotone and zero for ``r <= 0``; it gives the soft-layer pressure
+``p_soft = p(u_nu - w)`` of (2.5). Every law gives its values, a (generalized)
+derivative for Newton's method (docs/method.md, section 5), and its Lipschitz
+constant ``L_p`` for the smallness condition of Theorem 3.4.
 """
 
 from __future__ import annotations
@@ -15,7 +16,13 @@ from numpy.typing import ArrayLike, NDArray
 
 
 class ComplianceLaw:
-    """Interface: ``p(r)``, ``p.derivative(r)`` and ``p.lipschitz``."""
+    """Interface of a compliance law: ``p(r)``, ``p.derivative(r)`` and ``p.lipschitz``.
+
+    Attributes
+    ----------
+    lipschitz : float
+        The Lipschitz constant ``L_p`` of H(p) (Theorem 3.4).
+    """
 
     lipschitz: float
 
@@ -31,7 +38,18 @@ class ComplianceLaw:
 
 @dataclass(frozen=True)
 class LinearCompliance(ComplianceLaw):
-    """``p(r) = c r_+`` (the paper's example uses c = 0.4)."""
+    """The linear law ``p(r) = c r_+`` (the paper's examples use c = 0.4).
+
+    Parameters
+    ----------
+    c : float
+        The stiffness of the soft layer, >= 0; also the Lipschitz constant ``L_p``.
+
+    Raises
+    ------
+    ValueError
+        If ``c`` is negative or not finite.
+    """
 
     c: float
 
@@ -58,6 +76,19 @@ class TableCompliance(ComplianceLaw):
     """Piecewise-linear ``p`` through the points ``(r_i, p_i)``, ``0 = r_0 < r_1 < ...``.
 
     ``p = 0`` for ``r <= 0``; beyond the last point it continues with the last slope.
+    The Lipschitz constant ``L_p`` is the largest slope.
+
+    Parameters
+    ----------
+    r : tuple of float
+        The penetrations ``r_i``, strictly increasing, starting at 0 (at least two).
+    p : tuple of float
+        The pressures ``p_i = p(r_i)``, non-decreasing, starting at 0.
+
+    Raises
+    ------
+    ValueError
+        If the table is not a monotone law through (0, 0) (the message names the entry).
     """
 
     r: tuple[float, ...]
@@ -116,8 +147,18 @@ class TableCompliance(ComplianceLaw):
 class CallableCompliance(ComplianceLaw):
     """A user law from the Python API: ``p`` and its derivative ``dp`` as callables.
 
-    ``lipschitz`` is the user's bound on ``dp``; it is only used for the
-    smallness estimate of Theorem 3.4.
+    :class:`vemwear.Problem` checks H(p) on samples (``check_law``): zero for
+    ``r <= 0``, non-negative, monotone.
+
+    Parameters
+    ----------
+    p : callable
+        ``p(r)`` for an array ``r`` of penetrations, elementwise.
+    dp : callable
+        Its (generalized) derivative, elementwise, for Newton's method.
+    lipschitz : float, optional
+        The user's bound on ``dp``; only used for the smallness estimate of
+        Theorem 3.4 (NaN: unknown).
     """
 
     p: Callable[[NDArray[np.float64]], NDArray[np.float64]]

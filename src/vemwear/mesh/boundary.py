@@ -119,8 +119,19 @@ def tag_rectangle(
 ) -> Mesh:
     """Tag the sides of a rectangular mesh; defaults to the paper's Section 5 layout.
 
-    ``parts`` maps part names to a side or a list of sides; the default is
-    clamped = left, traction = top and right, contact = bottom.
+    Parameters
+    ----------
+    mesh : Mesh
+        A mesh of an axis-aligned rectangle.
+    parts : mapping, optional
+        Part name (``clamped`` = Gamma_D, ``traction`` = Gamma_N, ``contact`` = Gamma_C)
+        to a side (``left``, ``right``, ``bottom``, ``top``) or a list of sides; the
+        default is clamped = left, traction = top and right, contact = bottom.
+
+    Returns
+    -------
+    Mesh
+        The mesh with its boundary edges tagged.
     """
     if parts is None:
         parts = {"clamped": "left", "traction": ["top", "right"], "contact": "bottom"}

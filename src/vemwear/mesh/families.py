@@ -295,9 +295,28 @@ def rectangle_voronoi(
     origin: Sequence[float] = (0.0, 0.0),
     **kwargs: object,
 ) -> Mesh:
-    """Centroidal Voronoi mesh of a rectangle with exactly ``n_cells`` cells.
+    """Centroidal Voronoi mesh of a rectangle with exactly ``n_cells`` cells (untagged).
 
     A shortcut for ``voronoi_mesh(rectangle_domain(size, origin), n_cells, seed,
-    **kwargs)``; see :func:`~vemwear.mesh.voronoi.voronoi_mesh`.
+    **kwargs)``; see :func:`~vemwear.mesh.voronoi.voronoi_mesh`. The paper's Example 5.4
+    uses 2048 cells of (0, 2) x (0, 1) with seed 0.
+
+    Parameters
+    ----------
+    size : (float, float)
+        Side lengths ``(lx, ly)``.
+    n_cells : int
+        The number of cells.
+    seed : int or None
+        Seed of the initial points (None: not reproducible).
+    origin : (float, float)
+        The lower-left corner.
+    **kwargs
+        Further options of :func:`~vemwear.mesh.voronoi.voronoi_mesh` (Lloyd iterations
+        and tolerances).
+
+    Returns
+    -------
+    Mesh
     """
     return voronoi_mesh(rectangle_domain(size, origin), n_cells, seed, **kwargs)  # type: ignore[arg-type,return-value]

@@ -32,6 +32,19 @@ def rectangle_squares(
 
     The boundary is untagged; use :meth:`Mesh.with_boundary` or
     :func:`vemwear.mesh.boundary.tag_rectangle`.
+
+    Parameters
+    ----------
+    size : (float, float)
+        Side lengths ``(lx, ly)`` (default: the paper's (0, 2) x (0, 1)).
+    divisions : (int, int)
+        Cells ``(nx, ny)`` along x and y (default: the paper's 32 x 16).
+    origin : (float, float)
+        The lower-left corner.
+
+    Returns
+    -------
+    Mesh
     """
     points, a, b, c, d = _grid(size, divisions, origin)
     return Mesh.from_cells(points, np.column_stack([a, b, c, d]))
@@ -43,11 +56,24 @@ def rectangle_triangles(
     origin: tuple[float, float] = (0.0, 0.0),
     diagonal: str = "right",
 ) -> Mesh:
-    """Rectangle split into ``2 * nx * ny`` triangles.
+    """Rectangle split into ``2 * nx * ny`` triangles (untagged).
 
-    ``diagonal="right"`` cuts every square from lower-left to upper-right,
-    ``"left"`` from lower-right to upper-left, ``"alternate"`` mixes both in a
-    checkerboard (the union-jack-like pattern).
+    Parameters
+    ----------
+    size : (float, float)
+        Side lengths ``(lx, ly)``.
+    divisions : (int, int)
+        Grid rectangles ``(nx, ny)``, each cut into two triangles.
+    origin : (float, float)
+        The lower-left corner.
+    diagonal : {"right", "left", "alternate"}
+        ``"right"`` cuts every rectangle from lower-left to upper-right, ``"left"``
+        from lower-right to upper-left, ``"alternate"`` mixes both in a checkerboard
+        (the union-jack-like pattern).
+
+    Returns
+    -------
+    Mesh
     """
     points, a, b, c, d = _grid(size, divisions, origin)
     right = np.column_stack([a, b, c]), np.column_stack([a, c, d])

@@ -161,6 +161,7 @@ def read_mesh(path: str | os.PathLike[str], *, check: bool = True) -> Mesh:
     Parameters
     ----------
     path : str or Path
+        The mesh file.
     check : bool
         Check the mesh: no dangling vertices (used by no cell; ``.msh`` files may keep
         geometry points, which are dropped), no duplicate vertices, no cell listing a
@@ -215,6 +216,20 @@ def write_mesh(mesh: Mesh, path: str | Path, file_format: str | None = None) -> 
     """Write a mesh (cells and tagged boundary lines) with meshio.
 
     Gmsh ``.msh`` holds triangles and quadrilaterals only; other polygons need ``.vtu``.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The mesh; its boundary parts are written as line cells with cell data ``part``.
+    path : str or Path
+        The file; its suffix chooses the format unless ``file_format`` is given.
+    file_format : str, optional
+        A meshio format name (``.msh`` files are written as ``gmsh22``).
+
+    Raises
+    ------
+    MeshError
+        If a Gmsh file would need cells other than triangles and quadrilaterals.
     """
     path = Path(path)
     fmt = file_format or ("gmsh22" if path.suffix == ".msh" else None)

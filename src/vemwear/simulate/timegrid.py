@@ -1,4 +1,8 @@
-"""Partitions of [0, T] (paper Section 3.4): uniform, explicit steps, repeating patterns."""
+"""Partitions of [0, T] (paper Section 3.4): uniform, explicit steps, repeating patterns.
+
+The scheme (3.21)-(3.23) runs on any partition ``0 = t_0 < ... < t_N = T`` with steps
+``k_n = t_{n+1} - t_n``; Example 5.3 uses a non-uniform one (docs/method.md, section 4).
+"""
 
 from __future__ import annotations
 
@@ -11,7 +15,22 @@ from numpy.typing import ArrayLike, NDArray
 
 @dataclass(frozen=True, eq=False)
 class TimeGrid:
-    """Time levels ``0 = t_0 < t_1 < ... < t_N = T``; ``k_n = t_{n+1} - t_n``."""
+    """Time levels ``0 = t_0 < t_1 < ... < t_N = T``; ``k_n = t_{n+1} - t_n``.
+
+    Build one with :meth:`uniform`, :meth:`from_steps` or :meth:`pattern`, or from the
+    levels themselves.
+
+    Parameters
+    ----------
+    t : array_like
+        The levels: finite, strictly increasing, starting at 0 (stored read-only).
+
+    Raises
+    ------
+    ValueError
+        If the levels are empty, not finite, do not start at 0 or do not increase
+        strictly (the message names the offending pair).
+    """
 
     t: NDArray[np.float64]
 
@@ -34,7 +53,15 @@ class TimeGrid:
 
     @classmethod
     def uniform(cls, T: float, steps: int) -> TimeGrid:
-        """``steps`` equal steps of size ``T / steps``."""
+        """``steps`` equal steps of size ``T / steps``.
+
+        Parameters
+        ----------
+        T : float
+            The final time, > 0.
+        steps : int
+            The number of steps, >= 1.
+        """
         if int(steps) != steps or steps < 1:
             raise ValueError(f"time grid: steps must be a positive integer, got {steps}")
         if not T > 0:
@@ -43,7 +70,13 @@ class TimeGrid:
 
     @classmethod
     def from_steps(cls, steps: Sequence[float] | ArrayLike) -> TimeGrid:
-        """Levels from an explicit list of step sizes ``k_0, k_1, ...``."""
+        """Levels from an explicit list of step sizes ``k_0, k_1, ...``.
+
+        Parameters
+        ----------
+        steps : sequence of float
+            The step sizes, each > 0; ``T`` is their sum.
+        """
         k = np.asarray(steps, dtype=float)
         if k.ndim != 1 or k.size == 0 or np.any(~(k > 0)):
             raise ValueError(f"time grid: step sizes must be positive numbers, got {k.tolist()}")
@@ -54,6 +87,13 @@ class TimeGrid:
         """Repeat the step sizes of ``pattern`` until T; the last step is cut to end at T.
 
         The paper's Example 5.3 uses ``pattern = [1/128, 3/128]`` with T = 1.
+
+        Parameters
+        ----------
+        T : float
+            The final time, > 0.
+        pattern : sequence of float
+            The step sizes to repeat, each > 0.
         """
         k = np.asarray(pattern, dtype=float)
         if k.ndim != 1 or k.size == 0 or np.any(~(k > 0)):
@@ -68,6 +108,7 @@ class TimeGrid:
 
     @property
     def T(self) -> float:
+        """The final time ``t_N``."""
         return float(self.t[-1])
 
     @property
@@ -77,10 +118,24 @@ class TimeGrid:
 
     @property
     def n_steps(self) -> int:
+        """The number of steps ``N``."""
         return len(self.t) - 1
 
     def index(self, times: ArrayLike, rtol: float = 1e-9) -> NDArray[np.int64]:
-        """Indices of the levels closest to the given times (error if none is close)."""
+        """Indices of the levels at the given times.
+
+        Parameters
+        ----------
+        times : array_like
+            Times, each a level of the grid up to ``rtol * max(T, 1)``.
+        rtol : float
+            Relative tolerance of the match.
+
+        Raises
+        ------
+        ValueError
+            If a time is not a level (the message lists those).
+        """
         times = np.atleast_1d(np.asarray(times, dtype=float))
         idx = np.abs(self.t[None, :] - times[:, None]).argmin(axis=1)
         off = np.abs(self.t[idx] - times) > rtol * max(self.T, 1.0)
@@ -89,6 +144,7 @@ class TimeGrid:
         return idx
 
     def describe(self) -> dict:
+        """``T``, the number of levels and the smallest and largest steps (JSON-friendly)."""
         k = self.k
         return {
             "T": self.T,

@@ -1,0 +1,105 @@
+"""The package face: the lazy top-level API and its numpydoc docstrings."""
+
+from __future__ import annotations
+
+import inspect
+import re
+import subprocess
+import sys
+
+import pytest
+
+import vemwear
+
+API = [n for n in vemwear.__all__ if n != "__version__"]
+
+#: Names whose docstrings live in modules changed elsewhere right now
+#: (vemwear/simulate/loop.py); they are expected to fail until those are completed,
+#: and the strict xfail reports it when they pass.
+PENDING = {"simulate", "Result"}
+
+
+def test_import_is_cheap_and_names_resolve_lazily() -> None:
+    code = (
+        "import sys, vemwear; heavy = [m for m in ('numpy', 'scipy', 'vemwear.simulate') "
+        "if m in sys.modules]; assert not heavy, heavy; "
+        "vemwear.TimeGrid; assert 'vemwear.simulate' in sys.modules"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_the_top_level_api() -> None:
+    from vemwear.config import load_config
+    from vemwear.simulate import Problem, simulate
+
+    assert vemwear.simulate is simulate and vemwear.Problem is Problem
+    assert vemwear.load_config is load_config
+    assert sorted(dir(vemwear)) == sorted(vemwear.__all__)
+    assert {"simulate", "Problem", "TimeGrid", "SolverOptions", "Material", "Result"} <= set(API)
+    assert {"LinearCompliance", "TableCompliance", "save_result", "load_result"} <= set(API)
+    assert {"rectangle_squares", "rectangle_voronoi", "tag_rectangle", "read_mesh"} <= set(API)
+    with pytest.raises(AttributeError, match="no attribute 'simulat'"):
+        vemwear.simulat  # noqa: B018
+
+
+def _parameters(obj: object) -> list[str]:
+    try:
+        sig = inspect.signature(obj)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return []
+    return [p.name for p in sig.parameters.values() if p.name != "self"]
+
+
+def _section(doc: str, title: str) -> str:
+    m = re.search(
+        rf"^{title}\n-{{{len(title)}}}\n(.*?)(?=^\w[\w ]*\n-{{3,}}\n|\Z)", doc, re.M | re.S
+    )
+    return m.group(1) if m else ""
+
+
+def _documented(section: str) -> dict[str, tuple[str, str]]:
+    """``{name: (type, description)}`` of a numpydoc Parameters section."""
+    out: dict[str, tuple[str, str]] = {}
+    lines = section.splitlines()
+    for i, line in enumerate(lines):
+        if line and not line.startswith(" "):
+            names, _, typ = line.partition(" : ")
+            desc = []
+            for follow in lines[i + 1 :]:
+                if follow and not follow.startswith(" "):
+                    break
+                desc.append(follow.strip())
+            for n in names.split(","):
+                out[n.strip().lstrip("*")] = (typ.strip(), " ".join(desc).strip())
+    return out
+
+
+def _check(name: str) -> None:
+    obj = getattr(vemwear, name)
+    doc = inspect.getdoc(obj) or ""
+    assert doc.strip(), f"{name}: no docstring"
+    params = _parameters(obj)
+    if not params:
+        return
+    section = _section(doc, "Parameters")
+    assert section, f"{name}: no Parameters section"
+    documented = _documented(section)
+    missing = [p for p in params if p not in documented]
+    assert not missing, f"{name}: parameters not documented: {missing}"
+    for p in params:
+        typ, desc = documented[p]
+        assert typ or p in ("args", "kwargs", "options"), f"{name}: {p} has no type"
+        assert desc, f"{name}: {p} has no description"
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="simulate/loop.py"))
+        if n in PENDING
+        else n
+        for n in API
+    ],
+)
+def test_every_top_level_name_has_a_numpydoc_docstring(name: str) -> None:
+    _check(name)
