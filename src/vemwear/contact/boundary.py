@@ -89,24 +89,24 @@ def contact_boundary(mesh: Mesh) -> ContactBoundary:
     starts = [int(v) for v in np.unique(edges[:, 0]) if not has_pred[v]]
     if not starts:  # a closed loop
         starts = [int(edges[0, 0])]
-    order, arc = [], []
+    chain: list[int] = []
+    chain_s: list[float] = []
     seen = np.zeros(nv, dtype=bool)
     for v0 in starts:
         v, s = v0, 0.0
         while v >= 0 and not seen[v]:
             seen[v] = True
-            order.append(v)
-            arc.append(s)
-            nxt = succ[v]
+            chain.append(v)
+            chain_s.append(s)
+            nxt = int(succ[v])
             if nxt >= 0:
                 s += float(np.linalg.norm(P[nxt] - P[v]))
             v = nxt
-    order = np.asarray(order, dtype=np.int64)
-    arc = np.asarray(arc)
+    order = np.asarray(chain, dtype=np.int64)
     clamped = np.zeros(nv, dtype=bool)
     clamped[mesh.part_vertices("clamped")] = True
     keep = ~clamped[order]
-    nodes, arc = order[keep], arc[keep]
+    nodes, arc = order[keep], np.asarray(chain_s, dtype=float)[keep]
     if nodes.size == 0:
         raise MeshError("every contact vertex is also clamped: no contact node is left")
     normals = nsum[nodes] / np.linalg.norm(nsum[nodes], axis=1)[:, None]

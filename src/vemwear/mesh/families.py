@@ -124,7 +124,7 @@ def distorted_quads(
     lx, ly, nx, ny = _size_div(size, divisions)
     if not 0.0 <= amplitude < 0.25:
         raise ValueError(f"amplitude must lie in [0, 0.25) to keep cells convex, got {amplitude}")
-    base = rectangle_squares((lx, ly), (nx, ny), tuple(origin))
+    base = rectangle_squares((lx, ly), (nx, ny), (float(origin[0]), float(origin[1])))
     return perturb_vertices(
         base, (amplitude * lx / nx, amplitude * ly / ny), seed, slide_boundary=slide_boundary
     )
@@ -173,7 +173,8 @@ def hexagons(
         rows.append(np.column_stack([x, np.full(len(x), y)]))
     o = np.asarray(origin, dtype=float)
     seeds = np.vstack(rows) + o
-    return voronoi_from_seeds(rectangle_domain((lx, ly), o), seeds, collapse_tol=1e-6)
+    domain = rectangle_domain((lx, ly), (float(o[0]), float(o[1])))
+    return voronoi_from_seeds(domain, seeds, collapse_tol=1e-6)
 
 
 def nonconvex_mesh(
@@ -269,7 +270,7 @@ def squares_with_hanging_nodes(
         ones being hanging nodes.
     """
     lx, ly, nx, ny = _size_div(size, divisions)
-    base = rectangle_squares((lx, ly), (nx, ny), tuple(origin))
+    base = rectangle_squares((lx, ly), (nx, ny), (float(origin[0]), float(origin[1])))
     i = np.arange(nx * ny) % nx
     j = np.arange(nx * ny) // nx
     if pattern == "checkerboard":

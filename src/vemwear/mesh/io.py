@@ -36,7 +36,7 @@ def to_meshio(mesh: Mesh, with_boundary: bool = True) -> meshio.Mesh:
     cell_data["cell_id"] = cell_ids
     if with_boundary and len(mesh.boundary_edges):
         blocks.append(meshio.CellBlock("line", mesh.boundary_edges))
-        cell_data["part"].append(mesh.boundary_tags.astype(np.int32))
+        cell_data["part"].append(np.asarray(mesh.boundary_tags, dtype=np.int32))
         cell_data["cell_id"].append(-np.ones(len(mesh.boundary_edges), np.int64))
     pts = np.column_stack([mesh.points, np.zeros(mesh.n_points)])
     return meshio.Mesh(pts, blocks, cell_data=cell_data)

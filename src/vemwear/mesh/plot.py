@@ -88,7 +88,7 @@ def plot_mesh(
     be = mesh.boundary_edges
     for name in (*PARTS, "untagged"):
         code = 0 if name == "untagged" else part_code(name)
-        sel = mesh.boundary_tags == code
+        sel = np.asarray(mesh.boundary_tags == code, dtype=bool)
         if not np.any(sel):
             continue
         ax.add_collection(

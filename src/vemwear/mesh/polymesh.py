@@ -276,7 +276,8 @@ class Mesh:
         )
         pa, pb = self.points[a] - ref, self.points[b] - ref
         cross = pa[:, 0] * pb[:, 1] - pb[:, 0] * pa[:, 1]
-        return 0.5 * np.bincount(self.edge_cells, weights=cross, minlength=self.n_cells)
+        areas = np.bincount(self.edge_cells, weights=cross, minlength=self.n_cells)
+        return np.asarray(0.5 * areas, dtype=np.float64)
 
     @cached_property
     def cell_diameters(self) -> NDArray[np.float64]:

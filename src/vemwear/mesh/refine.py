@@ -23,6 +23,7 @@ kernel (see :func:`~vemwear.mesh.quality.kernel_disks`).
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -82,6 +83,18 @@ def _per_cell(
     return out
 
 
+@overload
+def refine_cells(
+    mesh: Mesh, cell_ids: ArrayLike, *, return_parent: Literal[False] = ...
+) -> Mesh: ...
+
+
+@overload
+def refine_cells(
+    mesh: Mesh, cell_ids: ArrayLike, *, return_parent: Literal[True]
+) -> tuple[Mesh, IntArray]: ...
+
+
 def refine_cells(
     mesh: Mesh, cell_ids: ArrayLike, *, return_parent: bool = False
 ) -> Mesh | tuple[Mesh, IntArray]:
@@ -108,8 +121,8 @@ def refine_cells(
     if sel.size and (sel[0] < 0 or sel[-1] >= mesh.n_cells):
         raise ValueError(f"cell ids must lie in 0..{mesh.n_cells - 1}")
     if sel.size == 0:
-        parent = np.arange(mesh.n_cells)
-        return (mesh, parent) if return_parent else mesh
+        same = np.arange(mesh.n_cells, dtype=np.int64)
+        return (mesh, same) if return_parent else mesh
     P = mesh.points
     nP = mesh.n_points
     new_pts: list[FloatArray] = []
@@ -218,13 +231,14 @@ def _carry_tags(
     old: Mesh, new: Mesh, on_edge: dict[tuple[int, int], list[tuple[float, int]]]
 ) -> Mesh:
     """Boundary tags of ``new`` from ``old``: a half of a split edge keeps its parent's code."""
-    if not np.any(old.boundary_tags):
+    old_tags = old.boundary_tags
+    if old_tags is None or not np.any(old_tags):
         return new
     nk = max(old.n_points, 1)
     ob = np.sort(old.boundary_edges, axis=1)
     okey = ob[:, 0] * nk + ob[:, 1]
     order = np.argsort(okey)
-    okey, otag = okey[order], old.boundary_tags[order]
+    okey, otag = okey[order], old_tags[order]
     parent_edge = np.arange(new.n_points, dtype=np.int64)  # new vertex -> an old edge key
     is_new = np.zeros(new.n_points, dtype=bool)
     for (a, b), lst in on_edge.items():

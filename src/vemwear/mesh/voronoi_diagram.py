@@ -280,7 +280,7 @@ def _area_centroid(off: IntArray, xy: FloatArray) -> tuple[FloatArray, FloatArra
     cy = np.bincount(gp, weights=(a[:, 1] + b[:, 1]) * cr, minlength=m)
     with np.errstate(divide="ignore", invalid="ignore"):
         cen = np.column_stack([cx, cy]) / (6.0 * area[:, None])
-    return area, cen + xy[off[:-1]]
+    return np.asarray(area, dtype=np.float64), cen + xy[off[:-1]]
 
 
 @dataclass

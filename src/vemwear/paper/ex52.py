@@ -23,7 +23,7 @@ same discrete data.
 from __future__ import annotations
 
 import shutil
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -289,6 +289,11 @@ def _paper_section(out: Path, sub: str, run: ExampleRun) -> list[str]:
     ]
 
 
+def _max_wear(name: str) -> Callable[[Context], float]:
+    """The headline number max w(T) of one set."""
+    return lambda ctx: float(ctx.details["max_wear"][name])
+
+
 EXAMPLE = Example(
     name=NAME,
     heading="wear for three data sets",
@@ -325,10 +330,7 @@ EXAMPLE = Example(
         *(_paper_figure(name) for name in DATA_SETS),
         OutputFile("wear_T_comparison.png", "w(T) of the three sets.", _wear_comparison, True),
     ),
-    headlines={
-        f"max_wear.{name}": (lambda ctx, name=name: ctx.details["max_wear"][name])
-        for name in DATA_SETS
-    },
+    headlines={f"max_wear.{name}": _max_wear(name) for name in DATA_SETS},
     paper_section=_paper_section,
 )
 

@@ -170,7 +170,7 @@ def displacement_difference(
     pa = Projection(reference.problem.mesh).evaluate(ua, pts)
     pb = Projection(other.problem.mesh).evaluate(ub, pts)
     d = pa - pb
-    comp = {}
+    comp: dict[str, Any] = {}
     for c, name in enumerate(("u1", "u2")):
         scale = float(np.abs(pa[:, c]).max())
         m = float(np.abs(d[:, c]).max())

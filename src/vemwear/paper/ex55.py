@@ -287,6 +287,10 @@ def _study_md(ctx: Context) -> str:
     return study_markdown(ctx.details["study"])
 
 
+def _write_study(ctx: Context, path: Path) -> None:
+    path.write_text(_study_md(ctx), encoding="utf-8")
+
+
 def _convergence(ctx: Context, path: Path) -> None:
     from .ex55_tables import plot_tables
 
@@ -331,7 +335,7 @@ EXAMPLE = Example(
         OutputFile(
             "table2_study.md",
             "the space / time split of the wear error.",
-            lambda ctx, path: path.write_text(_study_md(ctx), encoding="utf-8"),
+            _write_study,
             when=lambda ctx: ctx.details["study"] is not None,
         ),
     ),

@@ -176,7 +176,7 @@ def cached_solution(
     }
     if npz is not None and meta is not None:
         npz.parent.mkdir(parents=True, exist_ok=True)
-        arrays = sol.arrays()
+        arrays: dict[str, Any] = sol.arrays()
         _atomic_write(npz, lambda fh: np.savez(fh, **arrays), "wb")
         record = {
             "hash": key,
