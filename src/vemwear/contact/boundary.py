@@ -1,4 +1,4 @@
-"""The contact part Gamma_C: nodes, nodal quadrature weights, normals (design.md section 3).
+"""The contact part Gamma_C: nodes, nodal quadrature weights, normals (docs/method.md, section 3).
 
 Contact nodes are the mesh vertices on the closure of Gamma_C that are not on the
 closure of Gamma_D. Node ``a`` has the weight ``omega_a`` (half the lengths of its

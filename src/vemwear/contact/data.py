@@ -4,7 +4,10 @@ A coefficient along Gamma_C is a number, a callable of the node coordinates
 (Python API), or a piecewise-linear table ``{"along": "x" | "y" | "s", "at": [...],
 "values": [...]}`` in a coordinate of the node (``s`` is the arc length along the
 contact part). ``v*(t)`` is a 2-vector, a callable of t, or a table
-``{"t": [...], "values": [[vx, vy], ...]}`` interpolated linearly in time.
+``{"t": [...], "values": [[vx, vy], ...]}`` interpolated linearly in time. The
+coefficients enter the scheme at the contact nodes (nodal quadrature, docs/method.md,
+section 3); v*(t) through the friction direction ``n* = -v* / |v*|`` (2.2) and the
+wear rate ``kappa |v*(t)| p(u_nu - w)`` of (3.22).
 """
 
 from __future__ import annotations

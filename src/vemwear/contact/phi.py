@@ -1,4 +1,4 @@
-"""The contact functional phi_h with nodal quadrature (paper 2.21, design.md section 3)."""
+"""The contact functional phi_h with nodal quadrature (paper 2.21; docs/method.md, section 3)."""
 
 from __future__ import annotations
 

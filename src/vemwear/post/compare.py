@@ -5,7 +5,7 @@ The reference ``(u_ref, w_ref)`` is computed on a finer mesh that is *nested* (e
 coarse vertex is a fine vertex, every fine cell lies inside one coarse cell) and on a
 finer time grid. Both are compared at the **common time levels** (levels of the coarse
 grid that are also levels of the reference grid). The variants (keys of
-:attr:`ErrorHistory.displacement` and :attr:`ErrorHistory.wear`; docs/paper.md):
+:attr:`ErrorHistory.displacement` and :attr:`ErrorHistory.wear`; docs/method.md, section 7):
 
 ``"H1"`` (the primary displacement error, paper Table 1)
     ``||Pi_h u_h - Pi_ref u_ref||_{H1} / ||Pi_ref u_ref||_{H1}``: each solution projected

@@ -1,7 +1,7 @@
 """Norms of projected displacements and of the wear, and errors against exact solutions.
 
-Which norm is which (docs/paper.md, Example 5.5)
-------------------------------------------------
+Which norm is which (docs/method.md, section 7; paper Example 5.5)
+------------------------------------------------------------------
 ``"H1"``
     The full H1 norm (L2 part plus gradient part) of the piecewise linear field
     ``Pi v`` (:class:`~vemwear.vem.projection.Projection`, (3.8)-(3.10)): on a cell,

@@ -3,7 +3,9 @@
 :func:`prolongation` carries a virtual element function (its vertex values) of a coarse
 mesh to fine points, :func:`contact_prolongation` the wear along Gamma_C. Both are
 sparse matrices, built once per pair of meshes and applied to every time level
-(:class:`vemwear.post.compare.Comparison`).
+(:class:`vemwear.post.compare.Comparison`). They give the secondary error variants of
+Example 5.5 (docs/method.md, section 7); the primary ones compare the projections Pi
+(3.8)-(3.10) of both solutions and need no prolongation.
 """
 
 from __future__ import annotations

@@ -1,4 +1,8 @@
-"""The continuous data of Problem 2.1 and their discretization (paper Sections 2-3)."""
+"""The continuous data of Problem 2.1 and their discretization (paper Sections 2-3).
+
+The discrete choices the paper leaves open (nodal contact quadrature, normals at
+corners, the stabilization weight, the load) are those of docs/method.md, sections 1-4.
+"""
 
 from __future__ import annotations
 

@@ -6,7 +6,8 @@ For a batch of ``m`` cells with ``n`` vertices each (coordinates ``X``, shape
 * the projection ``Pi v`` (its strain from boundary values (3.8), its value at the vertex
   average (3.9) and its rotation (3.10)) comes from :mod:`vemwear.vem.projection`;
 * ``a_h^K(u, v) = |K| eps(Pi u) : C eps(Pi v) + S^K((I - Pi) u, (I - Pi) v)`` (3.11),
-  with the dofi-dofi stabilization ``S^K = s_K * sum_i chi_i chi_i``.
+  with the dofi-dofi stabilization ``S^K = s_K * sum_i chi_i chi_i``; the weight
+  ``s_K`` is the paper's 1 by default (docs/method.md, section 2).
 """
 
 from __future__ import annotations

@@ -1,5 +1,7 @@
 """The projection Pi of (3.8)-(3.10), lowest order (k = 1), as an operator.
 
+The formulas below are those of docs/method.md, section 2.
+
 On a cell K with vertices ``x_1, ..., x_n`` (counter-clockwise), vertex average
 ``xbar`` and ``d_i = x_i - xbar``, the projection of a virtual element function v with
 vertex values ``v_i`` is the linear field
