@@ -16,6 +16,7 @@ FAMILIES = mf.available_families()
 def test_hand_derived_data_symbolically() -> None:
     """f1 = -div sigma(u), sigma and grad u as written out in the module docstring."""
     import sympy  # in the test extras: this test must run, not skip
+
     x, y, lam, eta = sympy.symbols("x y lam eta")
     u = sympy.Matrix([sympy.sin(sympy.pi * x) * sympy.sin(sympy.pi * y), x**2 * y])
     grad = u.jacobian([x, y])
