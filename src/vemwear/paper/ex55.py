@@ -31,10 +31,8 @@ change and it holds the displacement at every needed time.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from fractions import Fraction
@@ -43,9 +41,10 @@ from typing import Any
 
 import numpy as np
 
-from .. import __version__
 from ..post.compare import Comparison, ErrorHistory, Solution
 from ..simulate import Problem, Result, SolverOptions, simulate
+from ..util.atomic import atomic_file, write_atomic
+from ..util.hashing import sha256_json
 from . import ExampleRun, ex52
 from .ex55_tables import (
     PAPER_TABLE1,
@@ -155,35 +154,25 @@ def _solver_desc(opts: SolverOptions) -> dict[str, Any]:
     return {"method": opts.method, "tol": opts.tol, "max_iter": opts.max_iter}
 
 
-def cache_key(reference: int, solver: SolverOptions) -> tuple[str, dict[str, Any]]:
+def cache_key(
+    reference: int, solver: SolverOptions, pr: Problem | None = None
+) -> tuple[str, dict[str, Any]]:
     """The hash (hex SHA-256) and the JSON inputs identifying a reference run.
 
-    The inputs are the format tag, the vemwear version, ``1/h``, the problem's
-    description (mesh sizes, material, time grid, loads, contact law and data) and
-    the solver method, tolerance and iteration limit (not the linear algebra
-    backend: it does not change the solution beyond the tolerance).
+    The inputs are the format tag, ``1/h``, the problem's fingerprint
+    (:meth:`~vemwear.simulate.Problem.fingerprint`: the physics and the discretization,
+    with the vemwear version) and the solver method, tolerance and iteration limit (the
+    tolerance bounds how far the cached solution may be from the exact discrete one;
+    the linear algebra backend does not change it beyond that), hashed by
+    :func:`vemwear.util.hashing.sha256_json`.
     """
     inputs = {
         "format": CACHE_FORMAT,
-        "vemwear": __version__,
         "reference": int(reference),
-        "problem": problem(reference).describe(),
+        "problem": (problem(reference) if pr is None else pr).fingerprint(),
         "solver": _solver_desc(solver),
     }
-    text = json.dumps(inputs, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest(), inputs
-
-
-def _atomic_write(path: Path, write: Callable[[Any], None], mode: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.tmp-")
-    try:
-        with os.fdopen(fd, mode) as fh:
-            write(fh)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    return sha256_json(inputs), inputs
 
 
 def _load_cached(npz: Path, meta: Path, key: str, times: Sequence[float]) -> Solution | None:
@@ -235,7 +224,8 @@ def reference_solution(
         original run when cached), "hash", "npz", "unknowns", "timings"}``.
     """
     opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
-    key, inputs = cache_key(reference, opts)
+    pr = problem(reference)
+    key, inputs = cache_key(reference, opts, pr)
     npz = meta = None
     if cache_dir is not None:
         cdir = Path(cache_dir)
@@ -254,7 +244,6 @@ def reference_solution(
                 "unknowns": info.get("unknowns"),
                 "timings": info.get("timings", {}),
             }
-    pr = problem(reference)
     if log is not None:
         log(
             f"{TITLE}: reference h = k = 1/{reference} ({2 * pr.mesh.n_points} unknowns, "
@@ -276,7 +265,8 @@ def reference_solution(
     if npz is not None and meta is not None:
         npz.parent.mkdir(parents=True, exist_ok=True)
         arrays = sol.arrays()
-        _atomic_write(npz, lambda fh: np.savez(fh, **arrays), "wb")
+        with atomic_file(npz) as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)  # type: ignore[arg-type]
         record = {
             "hash": key,
             "inputs": inputs,
@@ -286,7 +276,7 @@ def reference_solution(
             "stored_times": [float(t) for t in sol.t[sol.u_levels]],
             "created": time.strftime("%Y-%m-%dT%H:%M:%S"),
         }
-        _atomic_write(meta, lambda fh: json.dump(record, fh, indent=1), "w")
+        write_atomic(meta, json.dumps(record, indent=1))
         extra["npz"] = str(npz)
         if log is not None:
             log(f"{TITLE}: reference cached in {npz}")
