@@ -13,9 +13,9 @@ import pytest
 
 from conftest import small_config
 from vemwear import __version__
-from vemwear.cli import OutputDirError, atomic_output_dir
 from vemwear.cli.main import main
 from vemwear.paper import EXAMPLES, available_examples, ex52, load_example
+from vemwear.runner import OutputDirError, atomic_output_dir
 from vemwear.simulate import SolverOptions
 
 SMALL = small_config(
@@ -315,3 +315,33 @@ def test_example_cli(
     assert "set1" in text and "max wear at T" in text and str(out) in text
     assert main(["example", "5.2", "-o", str(out), "--no-progress"]) == 2
     assert leftovers(tmp_path) == []
+
+
+# ---------------------------------------------------------------------------- start-up
+def test_help_and_version_import_no_heavy_module() -> None:
+    """``vemwear --help`` and ``--version`` import neither NumPy nor the library's numerics
+    (start-up well under 0.3 s)."""
+    code = (
+        "import sys\n"
+        "from vemwear.cli.main import main\n"
+        "for argv in (['--version'], ['--help']):\n"
+        "    try:\n"
+        "        main(argv)\n"
+        "    except SystemExit:\n"
+        "        pass\n"
+        "heavy = {'numpy', 'scipy', 'matplotlib', 'pydantic', 'meshio', 'h5py'}\n"
+        "print(sorted(heavy & set(sys.modules)))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True
+    )
+    assert out.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_example_list(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["example", "--list"]) == 0
+    out = capsys.readouterr().out
+    for name, text in available_examples().items():
+        assert f"{name}" in out and text in out
+    assert main(["example", "5.2"]) == 2  # no -o OUTDIR
+    assert "give NAME and -o OUTDIR" in capsys.readouterr().err

@@ -19,7 +19,7 @@ import pytest
 
 from conftest import small_config
 from vemwear.cli.main import main
-from vemwear.cli.resume import CONFIG_COPY, README_NAME, partial_path
+from vemwear.runner.run import CONFIG_COPY, README_NAME, partial_path
 from vemwear.solvers import ConvergenceError
 
 sim = importlib.import_module("vemwear.simulate")  # the subpackage, not the function
@@ -227,23 +227,23 @@ def test_resume_refused_for_changed_inputs(
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert (
-        f"vemwear: error: --resume refused: {part} was computed from other inputs "
+        f"vemwear: error: --resume refused: {part} was computed from another problem "
         "([contact] mu: 0.2 -> 0.3); restore the inputs"
     ) in err
-    # another solver on the command line is another input too
-    config.write_text(CONFIG)
-    assert run(config, out, "--resume", "--solver", "uzawa") == 2
-    assert "solver method: 'newton' -> 'uzawa'" in capsys.readouterr().err
-    # [output] and title do not change the numbers: resuming is allowed
+    # [output] and title do not change the numbers, nor do the solver options: a run
+    # stopped by a convergence failure continues with another method and tolerance
     assert {p.name: p.read_bytes() for p in part.iterdir()} == before
     assert not out.exists()
     config.write_text(
-        CONFIG.replace('title = "resume test"', 'title = "renamed"').replace(
-            "figures = false", "figures = false\ntimes = [0.5, 1.0]"
-        )
+        CONFIG.replace('title = "resume test"', 'title = "renamed"')
+        .replace("figures = false", "figures = false\ntimes = [0.5, 1.0]")
+        .replace('method = "newton"', 'method = "newton"\ntol = 1e-11\nmax_iter = 50')
     )
-    assert run(config, out, "--resume") == 0
+    assert run(config, out, "--resume", "--solver", "newton-full") == 0
     assert not part.exists()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["solver"]["method"] == "newton-full"
+    assert summary["inputs"]["extra"]["previous_solver"]["method"] == "newton"
 
 
 def test_resume_without_partial_and_damaged_partial(

@@ -40,6 +40,7 @@ def test_the_configs_are_package_data() -> None:
         assert f.is_file() and tomllib.loads(f.read_text(encoding="utf-8"))["title"], name
         assert config_path(name + ".toml") == config_path(name)
     assert (files("vemwear") / "py.typed").is_file()
+    assert (files("vemwear") / "__init__.pyi").is_file()
     with pytest.raises(KeyError, match="available: example_5_2_set1"):
         config_path("example_9")
 
@@ -52,7 +53,7 @@ def test_pyproject_ships_every_config_and_the_marker() -> None:
     shipped = {p.relative_to(pkg) for g in globs for p in pkg.glob(g)}
     wanted = {p.relative_to(pkg) for p in (pkg / "examples").glob("*.toml")}
     assert wanted and wanted <= shipped
-    assert Path("py.typed") in shipped
+    assert Path("py.typed") in shipped and Path("__init__.pyi") in shipped
     assert not list((ROOT / "examples").glob("*.toml"))  # one copy of each file
 
 

@@ -13,11 +13,12 @@ import numpy as np
 import pytest
 
 from vemwear.cli.main import main
-from vemwear.cli.mesh_cmd import contact_nodes, generate_mesh
+from vemwear.cli.mesh_cmd import generate_mesh
 from vemwear.mesh import (
     PARTS,
     Mesh,
     check_mesh,
+    contact_nodes,
     part_code,
     read_mesh,
     rectangle_squares,

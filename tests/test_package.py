@@ -42,6 +42,23 @@ def test_the_top_level_api() -> None:
         vemwear.simulat  # noqa: B018
 
 
+def test_the_stub_declares_the_same_names() -> None:
+    """Type checkers read ``__init__.pyi``; it re-exports exactly the lazy names."""
+    import ast
+    from importlib.resources import files
+
+    tree = ast.parse((files("vemwear") / "__init__.pyi").read_text(encoding="utf-8"))
+    stub = {
+        (a.asname or a.name): (node.module, a.name)
+        for node in tree.body
+        if isinstance(node, ast.ImportFrom)
+        for a in node.names
+    }
+    assert set(stub) == set(API) == set(vemwear._API)
+    for name, (module, orig) in stub.items():
+        assert orig == name and vemwear._API[name] == f"vemwear.{module}", name
+
+
 def _parameters(obj: object) -> list[str]:
     try:
         sig = inspect.signature(obj)  # type: ignore[arg-type]

@@ -153,7 +153,7 @@ def test_failed_save_keeps_old_files(run: Result, tmp_path: Path, monkeypatch) -
     def boom(*args, **kwargs):
         raise OSError("disk full")
 
-    monkeypatch.setattr("vemwear.post.results.json.dump", boom)
+    monkeypatch.setattr("vemwear.post.results.json.dumps", boom)
     with pytest.raises(OSError, match="disk full"):
         save_result(run, tmp_path, extra={"tag": "new"})
     after = {p.name: p.read_bytes() for p in tmp_path.iterdir()}

@@ -37,6 +37,9 @@ docs/method.md the method's discrete choices. The name ``vemwear.simulate`` is t
 function, also after its subpackage has been imported: import from the subpackage
 with ``from vemwear.simulate import Problem`` or ``importlib.import_module``
 (``import vemwear.simulate as m`` binds the function).
+
+Type checkers read the same names from ``__init__.pyi`` (the lazy-loading stub of
+SPEC 1), so that the lazy names keep their types.
 """
 
 from __future__ import annotations
@@ -44,26 +47,9 @@ from __future__ import annotations
 import sys
 from importlib import import_module
 from types import ModuleType
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 __version__ = "0.1.0"
-
-if TYPE_CHECKING:
-    from .config import ConfigError, apply_overrides, load_config, parse_config
-    from .contact import CallableCompliance, LinearCompliance, TableCompliance
-    from .mesh import (
-        Mesh,
-        read_mesh,
-        rectangle_squares,
-        rectangle_triangles,
-        rectangle_voronoi,
-        tag_rectangle,
-        voronoi_mesh,
-        write_mesh,
-    )
-    from .post.results import load_result, save_result
-    from .simulate import Problem, Result, SolverOptions, TimeGrid, simulate
-    from .vem import Material
 
 #: Top-level name -> the module that defines it (imported on first use).
 _API: dict[str, str] = {

@@ -1,9 +1,6 @@
 """Command line: ``vemwear run``, ``check``, ``schema``, ``example``, ``mesh``, ...
 
-The configuration format is :mod:`vemwear.config` (documented in ``docs/config.md``).
+Argument parsing, printing and exit codes only; the work is done by the library
+(:mod:`vemwear.runner` runs a configuration). The configuration format is
+:mod:`vemwear.config` (documented in ``docs/config.md``).
 """
-
-from ..post.outputs import write_outputs
-from .output import OutputDirError, atomic_output_dir, check_output_dir
-
-__all__ = ["OutputDirError", "atomic_output_dir", "check_output_dir", "write_outputs"]

@@ -34,56 +34,47 @@ import json
 import math
 import os
 import sys
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-from numpy.typing import NDArray
-
-from ..mesh import (
-    PARTS,
-    Mesh,
-    MeshError,
-    part_code,
-    quality_report,
-    read_mesh,
-    refine_along,
-    tag_rectangle,
-    write_mesh,
+from ..util.atomic import atomic_file
+from .common import (
+    EXIT_INPUT,
+    EXIT_OK,
+    PROG,
+    add_debug_option,
+    add_subcommand,
+    rows_text,
 )
-from ..mesh.checks import check_boundary, check_cells, check_conforming, check_vertices
-from ..mesh.plot import plot_mesh
-from ..mesh.quality import hanging_nodes
-from ..mesh.registry import FAMILIES
-from .output import OutputDirError, atomic_file
 
 if TYPE_CHECKING:
-    pass
+    from ..mesh import Mesh
 
 __all__ = [
     "MESH_SUFFIXES",
-    "add_parser",
-    "contact_nodes",
+    "SUMMARY",
     "generate_mesh",
-    "hanging_nodes",
     "load_mesh",
-    "mesh_summary",
-    "plot_mesh",
     "save_mesh",
+    "setup",
 ]
+
+#: The one-line summary of ``vemwear mesh``.
+SUMMARY = "Generate, inspect, plot and convert polygonal meshes."
 
 #: Mesh file types that ``generate`` and ``convert`` write.
 MESH_SUFFIXES: dict[str, str] = {
     ".vtu": "VTK unstructured grid (any polygons)",
     ".msh": "gmsh 2.2 (triangles and quadrilaterals only)",
 }
-#: Colours of the boundary parts in ``vemwear mesh plot`` (untagged edges: orange).
 
 
 # ---------------------------------------------------------------------------- families
 def _divisions_for(n: int, per: int, size: tuple[float, float], family: str) -> tuple[int, int]:
     """Grid ``(nx, ny)`` with ``per * nx * ny == n`` whose rectangles are closest to squares."""
+    from ..mesh import MeshError
+
     if n < 1 or n % per:
         raise MeshError(
             f"--cells {n}: family {family!r} has {per} cells per grid rectangle, "
@@ -109,6 +100,8 @@ def _divisions_for(n: int, per: int, size: tuple[float, float], family: str) -> 
 
 def _parse_param(text: str) -> tuple[str, Any]:
     """``NAME=VALUE`` with a Python literal value (a bare word is a string)."""
+    from ..mesh import MeshError
+
     name, sep, value = text.partition("=")
     name = name.strip()
     if not sep or not name.isidentifier():
@@ -168,6 +161,9 @@ def generate_mesh(
         For an unknown family, arguments the family does not take, or a generator
         that rejects its arguments (the message says which).
     """
+    from ..mesh import MeshError, refine_along, tag_rectangle
+    from ..mesh.registry import FAMILIES
+
     if family not in FAMILIES:
         raise MeshError(f"unknown mesh family {family!r}; available: {', '.join(FAMILIES)}")
     fam = FAMILIES[family]
@@ -248,6 +244,8 @@ def load_mesh(path: str | os.PathLike[str], *, check: bool = True) -> Mesh:
     ConfigError
         If a configuration file is invalid.
     """
+    from ..mesh import read_mesh
+
     if Path(path).suffix.lower() == ".toml" and Path(path).is_file():
         from ..config import load_config
 
@@ -257,6 +255,8 @@ def load_mesh(path: str | os.PathLike[str], *, check: bool = True) -> Mesh:
 
 def _check_target(path: Path, force: bool, suffixes: Sequence[str] | None) -> Path:
     """Refuse an unknown file type or an existing file (unless ``force``)."""
+    from ..runner.outdir import OutputDirError
+
     if suffixes is not None and path.suffix.lower() not in suffixes:
         kinds = "; ".join(
             f"{s} ({MESH_SUFFIXES[s]})" if s in MESH_SUFFIXES else s for s in suffixes
@@ -297,6 +297,8 @@ def save_mesh(mesh: Mesh, path: str | os.PathLike[str], *, force: bool = False) 
     MeshError
         A ``.msh`` file for a mesh with cells of more than four vertices.
     """
+    from ..mesh import MeshError, write_mesh
+
     p = _check_target(Path(path), force, tuple(MESH_SUFFIXES))
     if p.suffix.lower() == ".msh":
         big = sorted(n for n in mesh.groups if n > 4)
@@ -312,87 +314,11 @@ def save_mesh(mesh: Mesh, path: str | os.PathLike[str], *, force: bool = False) 
 
 
 # ---------------------------------------------------------------------------- inspection
-def contact_nodes(mesh: Mesh) -> NDArray[np.int64]:
-    """Vertices on the closure of the contact part that are not on the clamped part.
-
-    These carry the contact quadrature and the wear (design note, section 3).
-    """
-    return np.setdiff1d(mesh.part_vertices("contact"), mesh.part_vertices("clamped"))
-
-
-def _try(check: Callable[[], None]) -> str | None:
-    try:
-        check()
-    except MeshError as exc:
-        return str(exc)
-    return None
-
-
-def mesh_summary(mesh: Mesh, *, quality: bool = True) -> dict[str, Any]:
-    """Counts, validity and A1 quality of a mesh (what ``vemwear mesh inspect`` shows).
-
-    Parameters
-    ----------
-    mesh : Mesh
-    quality : bool
-        Also compute :func:`vemwear.mesh.quality_report` (only for meshes whose cells
-        are valid).
-
-    Returns
-    -------
-    dict
-        JSON-ready: ``points``, ``cells``, ``cells_by_vertices`` (``{n: count}``),
-        ``h``, ``area``, ``boundary_edges`` (per part and ``untagged``),
-        ``contact_nodes``, ``hanging_nodes``, ``valid`` and ``error`` (the first
-        failed check of vertices, cells and conformity), ``boundary_error`` (untagged
-        edges or a missing clamped/contact part; None if complete), and with
-        ``quality`` the A1 statistics ``quality`` (``{quantity: [min, mean, max]}``,
-        ``gamma1``, ``gamma2``, ``convex``, ``not_star_shaped``, ``warnings``). The
-        :class:`~vemwear.mesh.QualityReport` itself is under the key ``_report``.
-    """
-    tags = mesh.boundary_tags
-    error = None
-    for check in (check_vertices, check_cells, check_conforming):
-        error = _try(lambda c=check: c(mesh))
-        if error is not None:
-            break
-    out: dict[str, Any] = {
-        "points": mesh.n_points,
-        "cells": mesh.n_cells,
-        "cells_by_vertices": {int(n): len(ids) for n, (ids, _v) in sorted(mesh.groups.items())},
-        "h": float(mesh.h),
-        "area": float(np.sum(mesh.cell_areas)),
-        "boundary_edges": {
-            **{p: int(np.sum(tags == part_code(p))) for p in PARTS},
-            "untagged": int(np.sum(tags == 0)),
-        },
-        "contact_nodes": len(contact_nodes(mesh)),
-        "hanging_nodes": len(hanging_nodes(mesh)),
-        "valid": error is None,
-        "error": error,
-        "boundary_error": _try(lambda: check_boundary(mesh, ("clamped", "contact"))),
-    }
-    if quality and error is None:
-        rep = quality_report(mesh)
-        out["quality"] = {
-            "summary": {k: list(v) for k, v in rep.summary().items()},
-            "gamma1": rep.gamma1,
-            "gamma2": rep.gamma2,
-            "convex": int(np.sum(rep.convex)),
-            "not_star_shaped": int(np.sum(~rep.star_shaped)),
-            "warnings": list(rep.warnings),
-        }
-        out["_report"] = rep
-    return out
-
-
 def _ngons(counts: Mapping[int, int]) -> str:
     return ", ".join(f"{n}-gons {c}" for n, c in counts.items())
 
 
 def _inspect_text(source: str, s: Mapping[str, Any]) -> str:
-    from .main import PROG, _rows
-
     b = s["boundary_edges"]
     rows = [
         ("points", str(s["points"])),
@@ -413,7 +339,7 @@ def _inspect_text(source: str, s: Mapping[str, Any]) -> str:
         ),
     ]
     head = f"{PROG}: {source}: {'valid' if s['valid'] else 'INVALID'} mesh"
-    text = head + "\n" + _rows(rows)
+    text = head + "\n" + rows_text(rows)
     if "_report" in s:
         text += "\n" + str(s["_report"])
     return text
@@ -421,7 +347,11 @@ def _inspect_text(source: str, s: Mapping[str, Any]) -> str:
 
 def cmd_generate(args: argparse.Namespace) -> int:
     """``vemwear mesh generate FAMILY -o FILE``."""
-    from .main import EXIT_OK, PROG
+    import numpy as np
+
+    from ..mesh import PARTS, part_code
+    from ..mesh.checks import check_cells, check_conforming, check_vertices
+    from ..mesh.quality import hanging_nodes
 
     out = _check_target(Path(args.output), args.force, tuple(MESH_SUFFIXES))
     params = dict(_parse_param(t) for t in args.param or ())
@@ -452,7 +382,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 def cmd_inspect(args: argparse.Namespace) -> int:
     """``vemwear mesh inspect FILE_OR_CONFIG``: counts, validity, A1 quality."""
-    from .main import EXIT_INPUT, EXIT_OK, PROG
+    from ..mesh import mesh_summary
 
     mesh = load_mesh(args.file, check=False)  # the summary says what is wrong
     s = mesh_summary(mesh)
@@ -472,7 +402,8 @@ def cmd_plot(args: argparse.Namespace) -> int:
     """``vemwear mesh plot FILE -o PNG [--quality]``."""
     from matplotlib.figure import Figure
 
-    from .main import EXIT_OK, PROG
+    from ..mesh.checks import check_cells
+    from ..mesh.plot import plot_mesh
 
     types = tuple(f".{s}" for s in Figure().canvas.get_supported_filetypes())
     out = _check_target(Path(args.output), args.force, types)
@@ -493,7 +424,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
 def cmd_convert(args: argparse.Namespace) -> int:
     """``vemwear mesh convert IN OUT``."""
-    from .main import EXIT_OK, PROG
+    from ..runner.outdir import OutputDirError
 
     if Path(args.output).resolve() == Path(args.input).resolve():
         raise OutputDirError(f"{args.output}: input and output are the same file")
@@ -506,27 +437,21 @@ def cmd_convert(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------------------- parser
 def _family_listing() -> str:
+    from ..mesh.registry import FAMILIES
+
     return "families:\n" + "\n".join(f"  {f.name:<11}{f.description}" for f in FAMILIES.values())
 
 
-def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
-    """Add ``vemwear mesh`` and its subcommands to the ``vemwear`` subparsers.
+def setup(mesh_p: argparse.ArgumentParser) -> None:
+    """Fill in the parser of ``vemwear mesh`` with its subcommands.
 
     Parameters
     ----------
-    sub
-        The object returned by ``parser.add_subparsers()`` in
-        :func:`vemwear.cli.main.build_parser`.
-
-    Returns
-    -------
-    argparse.ArgumentParser
-        The ``mesh`` parser.
+    mesh_p : argparse.ArgumentParser
+        The ``mesh`` parser made by :func:`vemwear.cli.main.build_parser`.
     """
-    from .main import _debug_option, _subcommand
+    from ..mesh.registry import FAMILIES
 
-    d = "Generate, inspect, plot and convert polygonal meshes."
-    mesh_p = _subcommand(sub, "mesh", d)
     msub = mesh_p.add_subparsers(dest="mesh_command", metavar="SUBCOMMAND", title="subcommands")
     msub.required = True
 
@@ -534,7 +459,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # t
         "Generate a mesh of a rectangle, tag the paper's boundary parts (clamped left, "
         "traction top and right, contact bottom) and write it as .vtu or .msh."
     )
-    p = _subcommand(msub, "generate", d, d + "\n\n" + _family_listing())
+    p = add_subcommand(msub, "generate", d, d + "\n\n" + _family_listing())
     p.add_argument(
         "family",
         metavar="FAMILY",
@@ -601,7 +526,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # t
         "right, contact bottom) or none (untagged)",
     )
     p.add_argument("--force", action="store_true", help="replace an existing FILE")
-    _debug_option(p)
+    add_debug_option(p)
     p.set_defaults(func=cmd_generate)
 
     d = (
@@ -609,21 +534,21 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # t
         "and hanging nodes), the validity and the quality (assumption A1) of a mesh. "
         "Exit code 2 if the mesh is invalid."
     )
-    p = _subcommand(msub, "inspect", d)
+    p = add_subcommand(msub, "inspect", d)
     p.add_argument(
         "file",
         metavar="FILE_OR_CONFIG",
         help="mesh file (.vtu, .msh, ...) or configuration file (.toml)",
     )
     p.add_argument("--json", action="store_true", help="print the numbers as JSON")
-    _debug_option(p)
+    add_debug_option(p)
     p.set_defaults(func=cmd_inspect)
 
     d = (
         "Draw a mesh with its boundary parts coloured and hanging nodes marked; with "
         "--quality, every cell coloured by rho_K / h_K (assumption A1)."
     )
-    p = _subcommand(msub, "plot", d)
+    p = add_subcommand(msub, "plot", d)
     p.add_argument(
         "file",
         metavar="FILE_OR_CONFIG",
@@ -634,14 +559,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # t
     )
     p.add_argument("--quality", action="store_true", help="colour cells by rho_K / h_K")
     p.add_argument("--force", action="store_true", help="replace an existing image")
-    _debug_option(p)
+    add_debug_option(p)
     p.set_defaults(func=cmd_plot)
 
     d = "Read a mesh (or build the mesh of a configuration file) and write it as .vtu or .msh."
-    p = _subcommand(msub, "convert", d)
+    p = add_subcommand(msub, "convert", d)
     p.add_argument("input", metavar="IN", help="mesh file or configuration file (.toml)")
     p.add_argument("output", metavar="OUT", help="output file: .vtu or .msh")
     p.add_argument("--force", action="store_true", help="replace an existing OUT")
-    _debug_option(p)
+    add_debug_option(p)
     p.set_defaults(func=cmd_convert)
-    return mesh_p

@@ -17,6 +17,7 @@ from .locate import NonNestedMeshError, locate_cells, match_vertices, nested_cel
 from .polymesh import PARTS, Mesh, MeshError, part_code
 from .quality import QualityReport, kernel_disks, quality_report
 from .refine import refine_along, refine_cells, refine_where
+from .summary import contact_nodes, mesh_summary
 from .voronoi import (
     l_shape_domain,
     point_in_domain,
@@ -32,12 +33,14 @@ __all__ = [
     "NonNestedMeshError",
     "QualityReport",
     "check_mesh",
+    "contact_nodes",
     "distorted_quads",
     "hexagons",
     "kernel_disks",
     "l_shape_domain",
     "locate_cells",
     "match_vertices",
+    "mesh_summary",
     "nested_cells",
     "nonconvex_mesh",
     "part_code",

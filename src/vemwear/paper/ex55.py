@@ -32,18 +32,31 @@ change and it holds the displacement at every needed time.
 
 from __future__ import annotations
 
-import os
-from collections.abc import Callable, Mapping, Sequence
-from fractions import Fraction
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from ..post.compare import Comparison, Solution
-from ..simulate import Problem, SolverOptions
-from . import DESCRIPTIONS, ExampleRun, ex52
+from ..post.compare import Comparison
+from . import DESCRIPTIONS, ExampleRun
 from . import ex55_report as R
 from .driver import run_example
-from .ex55_reference import CACHE_FORMAT, cache_key, cached_solution, default_cache_dir
+from .ex55_reference import (
+    CACHE_FORMAT,
+    KAPPA,
+    LEVELS,
+    MU,
+    NAME,
+    QUICK_REFERENCE,
+    REFERENCE,
+    TITLE,
+    cache_key,
+    check_sizes,
+    common_times,
+    default_cache_dir,
+    problem,
+    problems,
+    reference_solution,
+)
 from .ex55_tables import (
     PAPER_TABLE1,
     PAPER_TABLE2,
@@ -80,138 +93,7 @@ __all__ = [
     "tables_markdown",
 ]
 
-NAME = "5.5"
-TITLE = f"Example {NAME}"
 DESCRIPTION = DESCRIPTIONS[NAME]
-
-# not stated for 5.5 in the paper: Example 5.3's data (Example 5.2's data set 1)
-MU, KAPPA = ex52.DATA_SETS["set1"]["mu"], ex52.DATA_SETS["set1"]["kappa"]
-LEVELS: tuple[int, ...] = (4, 8, 16, 32, 64)  # 1/h = 1/k
-REFERENCE: int = 256
-#: The reference and levels of ``vemwear paper --quick``.
-QUICK_REFERENCE: int = 64
-T = ex52.T
-
-
-def check_sizes(levels: Sequence[int], reference: int) -> tuple[tuple[int, ...], int]:
-    """Validate the mesh levels and the reference size (all as ``1/h``).
-
-    Parameters
-    ----------
-    levels : sequence of int
-        ``1/h`` of the coarse levels.
-    reference : int
-        ``1/h`` of the reference.
-
-    Returns
-    -------
-    (levels sorted increasing, reference)
-
-    Raises
-    ------
-    ValueError
-        If a level is not a positive integer, levels repeat, the reference is not
-        finer than every level, or a level does not divide the reference (the meshes
-        and time grids must be nested).
-    """
-    lv = [int(n) for n in levels]
-    if not lv or any(n < 1 or n != float(m) for n, m in zip(lv, levels, strict=True)):
-        raise ValueError(f"{TITLE}: levels must be positive integers (1/h), got {list(levels)}")
-    if len(set(lv)) != len(lv):
-        raise ValueError(f"{TITLE}: levels repeat: {lv}")
-    ref = int(reference)
-    if ref != reference or ref < 2:
-        raise ValueError(f"{TITLE}: the reference 1/h must be an integer >= 2, got {reference}")
-    bad = [n for n in lv if n >= ref or ref % n]
-    if bad:
-        raise ValueError(
-            f"{TITLE}: every level must divide the reference 1/h = {ref} and be "
-            f"smaller (nested meshes and time grids); offending: {bad}"
-        )
-    return tuple(sorted(lv)), ref
-
-
-def problem(n: int, steps: int | None = None) -> Problem:
-    """The problem with h = 1/n ((2n) x n squares) and ``steps`` uniform steps on [0, 1].
-
-    Parameters
-    ----------
-    n : int
-        ``1/h``.
-    steps : int, optional
-        Uniform time steps (default ``n``: k = h, the paper's choice).
-    """
-    return ex52.problem(MU, KAPPA, divisions=(2 * n, n), steps=n if steps is None else steps)
-
-
-def problems(*, levels: Sequence[int] = LEVELS) -> dict[str, Problem]:
-    """The coarse problems by name (``h4``, ``h8``, ...).
-
-    Parameters
-    ----------
-    levels : sequence of int
-        ``1/h = 1/k`` of each (paper: 4, 8, 16, 32, 64).
-    """
-    return {f"h{n}": problem(n) for n in levels}
-
-
-def common_times(levels: Sequence[int], T_: float = T) -> list[float]:
-    """The union of the time levels ``j T / n`` of every level ``n`` (exact fractions).
-
-    Parameters
-    ----------
-    levels : sequence of int
-        ``1/k`` of each uniform grid on [0, T].
-    T_ : float
-        The final time.
-    """
-    s = {Fraction(j, n) for n in levels for j in range(n + 1)}
-    return [float(f) * T_ for f in sorted(s)]
-
-
-# ----------------------------------------------------------------------------- reference
-def reference_solution(
-    reference: int,
-    times: Sequence[float],
-    *,
-    solver: SolverOptions | str = "newton",
-    cache_dir: str | os.PathLike[str] | None = None,
-    progress: bool = False,
-    log: Callable[[str], None] | None = None,
-) -> tuple[Solution, dict[str, Any]]:
-    """The reference solution h = k = 1/reference, from the cache or computed (and cached).
-
-    Parameters
-    ----------
-    reference : int
-        ``1/h = 1/k`` of the reference.
-    times : sequence of float
-        Times at which its displacement is needed (levels of its grid).
-    solver : SolverOptions or str
-        The step solver.
-    cache_dir : path, optional
-        Where ``ex55_reference_h{n}_{hash}.npz`` / ``.json`` live; ``None``: no cache.
-    progress : bool
-        Progress bar of the time loop.
-    log : callable, optional
-        Receives one line of text.
-
-    Returns
-    -------
-    (Solution, dict)
-        As :func:`vemwear.paper.ex55_reference.cached_solution`.
-    """
-    opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
-    return cached_solution(
-        problem(reference),
-        reference,
-        times,
-        solver=opts,
-        cache_dir=cache_dir,
-        progress=progress,
-        log=log,
-        label=f"{TITLE}: reference h = k = 1/{reference}",
-    )
 
 
 # ----------------------------------------------------------------------------- the example

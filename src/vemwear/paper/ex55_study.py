@@ -39,7 +39,7 @@ import numpy as np
 from ..post.compare import Comparison, Solution
 from ..simulate import Result, SolverOptions, simulate
 from . import ex52
-from .ex55 import (
+from .ex55_reference import (
     KAPPA,
     LEVELS,
     REFERENCE,

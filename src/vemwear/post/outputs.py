@@ -43,7 +43,7 @@ def write_outputs(
         The finished run.
     outdir : path
         Directory to write into (normally the temporary one of
-        :func:`vemwear.cli.output.atomic_output_dir`).
+        :func:`vemwear.runner.atomic_output_dir`).
     times : sequence of float
         Times of the contact-profile figure (levels of the time grid); default: T.
     figures, vtk : bool

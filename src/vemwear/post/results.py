@@ -90,7 +90,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from collections.abc import Mapping
 from datetime import UTC, datetime
 from pathlib import Path
@@ -101,6 +100,7 @@ from numpy.typing import NDArray
 
 from .. import __version__
 from ..mesh.polymesh import Mesh
+from ..util.atomic import atomic_file
 
 if TYPE_CHECKING:
     from ..simulate.loop import Result
@@ -177,9 +177,6 @@ def jsonable(x: Any) -> Any:
     if callable(x):
         return getattr(x, "__name__", type(x).__name__)
     return str(x)
-
-
-_jsonable = jsonable  # the former private name, still imported by vemwear.cli.config
 
 
 def _max(a: NDArray[Any]) -> float:
@@ -264,11 +261,6 @@ def _summary(
     }
 
 
-def _temp_in(directory: Path, name: str) -> tuple[int, Path]:
-    fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{name}.", suffix=".tmp")
-    return fd, Path(tmp)
-
-
 def save_result(
     result: Result,
     outdir: str | os.PathLike[str],
@@ -310,28 +302,11 @@ def save_result(
     arrays = result_arrays(result)
     summary = jsonable(_summary(result, extra, partial))
     targets = [out / NPZ_NAME, out / SUMMARY_NAME]
-    temps: list[Path] = []
-    try:
-        fd, tmp = _temp_in(out, NPZ_NAME)
-        temps.append(tmp)
-        with os.fdopen(fd, "wb") as fh:
+    with atomic_file(targets[0], durable=True) as npz, atomic_file(targets[1], durable=True) as js:
+        with open(npz, "wb") as fh:
             (np.savez_compressed if compress else np.savez)(fh, **arrays)  # type: ignore[arg-type]
-            fh.flush()
-            os.fsync(fh.fileno())
-        fd, tmp = _temp_in(out, SUMMARY_NAME)
-        temps.append(tmp)
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            json.dump(summary, fh, indent=2, allow_nan=False)
-            fh.write("\n")
-            fh.flush()
-            os.fsync(fh.fileno())
-        for tmp, target in zip(temps, targets, strict=True):
-            os.chmod(tmp, 0o644)
-            os.replace(tmp, target)
-    except BaseException:
-        for tmp in temps:
-            tmp.unlink(missing_ok=True)
-        raise
+        text = json.dumps(summary, indent=2, allow_nan=False) + "\n"
+        js.write_text(text, encoding="utf-8")
     return targets
 
 

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import os
 import re
-import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -34,6 +33,7 @@ from numpy.typing import NDArray
 
 from ..mesh.io import to_meshio
 from ..mesh.polymesh import Mesh
+from ..util.atomic import write_atomic
 from ..vem.local import Material
 from ..vem.projection import Projection
 
@@ -198,13 +198,5 @@ def write_vtk_series(
         if stale.is_file() and pattern.fullmatch(stale.name) and stale.name not in written:
             stale.unlink()
     pvd = out / f"{name}.pvd"
-    fd, tmp = tempfile.mkstemp(dir=out, prefix=f".{name}.pvd.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(_pvd_text(entries))
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, pvd)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_atomic(pvd, _pvd_text(entries))
     return pvd

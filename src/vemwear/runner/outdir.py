@@ -1,23 +1,23 @@
-"""Atomic output directories and the standard files of a run.
+"""Output directories of runs: checked before any computation, written atomically.
 
 A run writes into a temporary sibling of the output directory (``.NAME.tmp-XXXX``
-next to ``NAME``) and renames it into place only once everything is written. An
-existing non-empty output directory is refused unless ``force=True``; it is then
-replaced only after the new run has completed. On any error, ``Ctrl-C`` or
-``SystemExit`` the temporary directory is removed, so a failed run never leaves
-half-written output behind (and never destroys an older one).
+next to ``NAME``, :func:`vemwear.util.atomic.atomic_dir`) that is renamed into place
+only once everything is written. An existing non-empty output directory is refused
+unless ``force=True``; it is then replaced only after the new run has completed. On
+any error, ``Ctrl-C`` or ``SystemExit`` the temporary directory is removed, so a
+failed run never leaves half-written output behind (and never destroys an older one).
 """
 
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["OutputDirError", "atomic_file", "atomic_output_dir", "check_output_dir"]
+from ..util.atomic import atomic_dir
+
+__all__ = ["OutputDirError", "atomic_output_dir", "check_output_dir"]
 
 
 class OutputDirError(ValueError):
@@ -103,76 +103,17 @@ def atomic_output_dir(outdir: str | os.PathLike[str], force: bool = False) -> It
     OutputDirError
         As :func:`check_output_dir`, on entry and again just before the rename (in
         case another process created ``outdir`` meanwhile).
-
-    Examples
-    --------
-    >>> with atomic_output_dir("out") as tmp:          # doctest: +SKIP
-    ...     (tmp / "result.txt").write_text("done")
     """
     out = check_output_dir(outdir, force)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.tmp-"))
-    try:
+    with atomic_dir(out) as tmp:
         yield tmp
-        _commit(tmp, out, force)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-
-
-@contextmanager
-def atomic_file(path: Path) -> Iterator[Path]:
-    """A temporary file next to ``path`` (same suffix) that replaces it on success.
-
-    The file counterpart of :func:`atomic_output_dir` (used by ``vemwear mesh``); the
-    caller checks beforehand whether ``path`` may be replaced.
-    """
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, name = tempfile.mkstemp(
-            dir=path.parent, prefix=f".{path.stem}.tmp-", suffix=path.suffix
-        )
-    except OSError as exc:
-        raise OutputDirError(f"cannot create {path}: {exc.strerror or exc}") from exc
-    os.close(fd)
-    tmp = Path(name)
-    try:
-        yield tmp
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
-def _commit(tmp: Path, out: Path, force: bool) -> None:
-    """Rename ``tmp`` to ``out``, replacing an old ``out`` only if ``force``."""
-    os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; give the usual mode
-    if out.exists() or out.is_symlink():
-        if not out.is_dir() or out.is_symlink():
-            raise OutputDirError(f"output path {out} exists and is not a directory")
-        if _is_empty_dir(out):
-            out.rmdir()
-        elif not force:
-            raise OutputDirError(
-                f"output directory {out} appeared during the run and is not empty; "
-                "use --force to replace it"
-            )
-        else:
-            old = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.old-"))
-            old.rmdir()
-            os.replace(out, old)  # move the old output aside ...
-            try:
-                os.replace(tmp, out)  # ... put the new one in place ...
-            except BaseException:
-                os.replace(old, out)  # ... or restore the old one
-                raise
-            shutil.rmtree(old, ignore_errors=True)
-            return
-    os.replace(tmp, out)
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+        if out.exists() or out.is_symlink():  # created by another process meanwhile?
+            if not out.is_dir() or out.is_symlink():
+                raise OutputDirError(f"output path {out} exists and is not a directory")
+            if _is_empty_dir(out):
+                out.rmdir()
+            elif not force:
+                raise OutputDirError(
+                    f"output directory {out} appeared during the run and is not empty; "
+                    "use --force to replace it"
+                )

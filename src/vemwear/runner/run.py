@@ -1,7 +1,7 @@
-"""Partial results of stopped runs and ``vemwear run CONFIG -o OUTDIR --resume``.
+"""A run of a validated configuration: plan, solve, write; partial results and resume.
 
-When ``vemwear run`` stops after some time levels were finished (the solver did not
-converge, Ctrl-C, SIGTERM, any other error), the finished levels are written, atomically,
+When a run stops after some time levels were finished (the solver did not converge,
+Ctrl-C, SIGTERM, SIGHUP, any other error), the finished levels are written, atomically,
 into ``OUTDIR.partial/`` next to the output directory:
 
 ``result.npz``
@@ -9,26 +9,25 @@ into ``OUTDIR.partial/`` next to the output directory:
     levels (the later ones are zero).
 ``summary.json``
     ``"partial": true``, the ``reason``, ``completed`` and ``levels``; under
-    ``inputs.extra.resume`` the hashes that ``--resume`` checks.
+    ``inputs.extra.resume`` the fingerprint that ``--resume`` checks.
 ``PARTIAL.txt``
     What happened and the command that continues the run.
 ``config.toml``
     A copy of the configuration file (its SHA-256 is ``config_sha256``).
 
-The exit code is the one of the error (3 no convergence, 130 interrupted, ...).
-``vemwear run CONFIG -o OUTDIR --resume`` checks that the inputs are unchanged (the
-*inputs hash*: the configuration without ``title`` and ``[output]``, the effective
-solver options, the contents of a mesh file and the vemwear version), rebuilds the
-:class:`~vemwear.simulate.Result` of the finished levels and continues with
-``simulate(..., resume=partial)``: the result is bitwise the one of an uninterrupted
-run. On success ``OUTDIR`` is written as usual and ``OUTDIR.partial`` is removed.
+``--resume`` checks that the physics and the discretization are unchanged (the
+problem's fingerprint, :meth:`vemwear.simulate.Problem.fingerprint`, hashed by
+:func:`vemwear.util.hashing.sha256_json`); the solver options may change (a run
+stopped because its solver did not converge may continue with another tolerance,
+iteration limit or method). It rebuilds the :class:`~vemwear.simulate.Result` of the
+finished levels and continues with ``simulate(..., resume=partial)``: with the same
+solver the result is bitwise the one of an uninterrupted run. On success ``OUTDIR``
+is written as usual and ``OUTDIR.partial`` is removed.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
-import math
 import shlex
 import shutil
 from collections.abc import Mapping
@@ -37,9 +36,10 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .. import __version__
 from ..post.outputs import write_outputs
-from .output import OutputDirError, atomic_output_dir, check_output_dir
+from ..util.hashing import sha256_file, sha256_json
+from .outdir import OutputDirError, atomic_output_dir, check_output_dir
+from .signals import stop_reason
 
 if TYPE_CHECKING:
     from ..config import Config
@@ -51,10 +51,8 @@ __all__ = [
     "README_NAME",
     "ResumeError",
     "RunPlan",
+    "differences",
     "execute_run",
-    "fingerprint",
-    "inputs_sha256",
-    "load_partial",
     "partial_path",
     "prepare_run",
     "save_partial",
@@ -79,67 +77,6 @@ def partial_path(outdir: str | Path) -> Path:
 
 
 # ---------------------------------------------------------------------------- fingerprint
-def _sha256_file(path: str | Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
-
-def _normalize(x: Any) -> Any:
-    """Numbers as floats (``4`` and ``4.0`` are the same input), keys sorted by json."""
-    if isinstance(x, Mapping):
-        return {str(k): _normalize(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_normalize(v) for v in x]
-    if isinstance(x, bool) or x is None or isinstance(x, str):
-        return x
-    if isinstance(x, int | float):
-        return float(x) if math.isfinite(float(x)) else str(x)
-    return str(x)
-
-
-def fingerprint(cfg: Config, solver: SolverOptions) -> dict[str, Any]:
-    """Everything that determines the computed numbers of a run.
-
-    Parameters
-    ----------
-    cfg : Config
-        The validated configuration.
-    solver : SolverOptions
-        The effective solver options (after ``--solver``).
-
-    Returns
-    -------
-    dict
-        ``config`` (the data without ``title``, ``[output]`` and ``[solver]``),
-        ``solver`` (method, tol, max_iter and the resolved backend), ``mesh_file``
-        (the SHA-256 of a mesh file, or None) and ``vemwear_version``.
-    """
-    from ..solvers import resolve_backend
-
-    data = {k: v for k, v in cfg.data.items() if k not in ("title", "output", "solver")}
-    mesh_file = cfg.mesh_source.get("file")
-    return {
-        "config": _normalize(data),
-        "solver": {
-            "method": solver.method,
-            "tol": float(solver.tol),
-            "max_iter": solver.max_iter,
-            "backend": resolve_backend(solver.backend),
-        },
-        "mesh_file": _sha256_file(mesh_file) if mesh_file else None,
-        "vemwear_version": __version__,
-    }
-
-
-def inputs_sha256(fp: Mapping[str, Any]) -> str:
-    """SHA-256 of a :func:`fingerprint` (canonical JSON)."""
-    text = json.dumps(fp, sort_keys=True, separators=(",", ":"), allow_nan=False)
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
-
-
 def _flatten(x: Any, prefix: str = "") -> dict[str, Any]:
     if isinstance(x, Mapping):
         out: dict[str, Any] = {}
@@ -149,31 +86,40 @@ def _flatten(x: Any, prefix: str = "") -> dict[str, Any]:
     return {prefix: x}
 
 
+#: Section of the configuration of each entry of ``Problem.describe()``.
+_SECTIONS = {
+    "mesh": "[mesh]",
+    "material": "[material]",
+    "time": "[time]",
+    "f1": "[loads]",
+    "f2": "[loads]",
+    "p": "[contact]",
+    "g": "[contact]",
+    "mu": "[contact]",
+    "kappa": "[contact]",
+    "v_star": "[contact]",
+    "stabilization": "[vem]",
+}
+#: What the hashed parts of the fingerprint are, and the described entries they cover.
+_HASHED = {
+    "mesh": ("the mesh (vertices, cells or boundary parts)", ("mesh",)),
+    "time": ("the time levels", ("time",)),
+    "nodal": ("the values of g, mu or kappa at the contact nodes", ("g", "mu", "kappa")),
+    "v_star": ("the foundation velocity v_star", ("v_star",)),
+    "load": ("the loads f1, f2", ("f1", "f2")),
+    "vemwear_version": ("the vemwear version", ()),
+    "format": ("the fingerprint format", ()),
+}
+
+
 def _key_name(path: str) -> str:
-    """``config.contact.mu`` -> ``[contact] mu``; ``solver.method`` -> ``solver method``."""
-    parts = path.split(".")
-    if parts[0] == "config" and len(parts) >= 3:
-        return f"[{parts[1]}] {'.'.join(parts[2:])}"
-    if parts[0] == "config" and len(parts) == 2:
-        return f"[{parts[1]}]"
-    return " ".join(parts).replace("_", " ")
-
-
-def _differences(old: Mapping[str, Any], new: Mapping[str, Any], limit: int = 3) -> list[str]:
-    a, b = _flatten(old), _flatten(new)
-    diffs = []
-    for k in sorted(set(a) | set(b)):
-        if a.get(k, "<absent>") != b.get(k, "<absent>"):
-            if k == "mesh_file":
-                diffs.append("the contents of the mesh file changed")
-            else:
-                diffs.append(
-                    f"{_key_name(k)}: {_brief(a.get(k, '<absent>'))} -> "
-                    f"{_brief(b.get(k, '<absent>'))}"
-                )
-    if len(diffs) > limit:
-        diffs = [*diffs[:limit], f"and {len(diffs) - limit} more"]
-    return diffs
+    """``description.material.lam`` -> ``[material] lam``, ``description.mu`` ->
+    ``[contact] mu``."""
+    parts = path.split(".")[1:]
+    section = _SECTIONS.get(parts[0], f"[{parts[0]}]")
+    if parts[0] in ("material", "mesh", "time"):
+        return f"{section} {'.'.join(parts[1:])}"
+    return f"{section} {'.'.join(parts)}"
 
 
 def _brief(v: Any) -> str:
@@ -182,15 +128,30 @@ def _brief(v: Any) -> str:
     return s if len(s) <= 40 else s[:37] + "..."
 
 
+def differences(old: Mapping[str, Any], new: Mapping[str, Any], limit: int = 3) -> list[str]:
+    """What changed between two problem fingerprints, in words (at most ``limit`` items)."""
+    a, b = _flatten(old.get("description", {})), _flatten(new.get("description", {}))
+    diffs, changed = [], set()
+    for k in sorted(set(a) | set(b)):
+        x, y = a.get(k, "<absent>"), b.get(k, "<absent>")
+        if x != y:
+            diffs.append(f"{_key_name('description.' + k)}: {_brief(x)} -> {_brief(y)}")
+            changed.add(k.split(".")[0])
+    for key, (what, covers) in _HASHED.items():
+        if old.get(key) != new.get(key) and not changed & set(covers):
+            diffs.append(f"{what} changed")
+    if len(diffs) > limit:
+        diffs = [*diffs[:limit], f"and {len(diffs) - limit} more"]
+    return diffs
+
+
 # ---------------------------------------------------------------------------- save / load
 def _reason(exc: BaseException) -> str:
     from ..solvers import ConvergenceError
-    from .main import _Interrupted
 
-    if isinstance(exc, _Interrupted):
-        return "terminated (SIGTERM)"
-    if isinstance(exc, KeyboardInterrupt):
-        return "interrupted (Ctrl-C)"
+    by_signal = stop_reason(exc)
+    if by_signal is not None:
+        return by_signal
     if isinstance(exc, ConvergenceError):
         return f"the solver did not converge: {exc}"
     return f"error: {type(exc).__name__}: {exc}"
@@ -201,6 +162,15 @@ def _resume_command(config_path: str | Path, out: Path, solver_flag: str | None)
     if solver_flag:
         cmd += ["--solver", solver_flag]
     return " ".join(shlex.quote(c) for c in cmd)
+
+
+def _inputs_extra(cfg: Config, config_path: str | Path) -> dict[str, Any]:
+    """What ``summary.json`` stores under ``inputs.extra`` about the configuration."""
+    return {
+        "config": cfg.data,
+        "config_path": str(Path(config_path).resolve()),
+        "title": cfg.title,
+    }
 
 
 def save_partial(
@@ -254,18 +224,19 @@ This directory holds a PARTIAL result of vemwear: the run stopped before the end
   config:    {Path(config_path).resolve()}
              (a copy is {CONFIG_COPY}, sha256 {resume_info.get("config_sha256")})
   inputs:    sha256 {resume_info.get("inputs_sha256")}
-             (the configuration without title and [output], the solver options,
-             the mesh file's contents and the vemwear version)
+             (the physics and the discretization: mesh, material, loads, contact
+             data, time levels, and the vemwear version)
   written:   {datetime.now(UTC).isoformat(timespec="seconds")}
 
-To continue the run from level {c}, with the same inputs:
+To continue the run from level {c}:
 
   {command}
 
-The resumed run gives the same numbers as an uninterrupted run; it refuses to start if
-the inputs have changed. When it completes, it writes the output directory and removes
-this directory. To discard the partial result, delete this directory (or run again
-without --resume and with --force).
+The resumed run gives the same numbers as an uninterrupted run with the same solver;
+the solver options may change (e.g. a larger max_iter after a convergence failure).
+It refuses to start if the physics or the discretization changed. When it completes,
+it writes the output directory and removes this directory. To discard the partial
+result, delete this directory (or run again without --resume and with --force).
 
 result.npz holds the arrays of the finished levels: the array 'completed' = {c} counts
 them, later levels are zero. summary.json says "partial": true and gives the reason.
@@ -274,16 +245,7 @@ them, later levels are zero. summary.json says "partial": true and gives the rea
     return part
 
 
-def _inputs_extra(cfg: Config, config_path: str | Path) -> dict[str, Any]:
-    """What ``summary.json`` stores under ``inputs.extra`` about the configuration."""
-    return {
-        "config": cfg.data,
-        "config_path": str(Path(config_path).resolve()),
-        "title": cfg.title,
-    }
-
-
-def load_partial(part: Path, cfg: Config, current: Mapping[str, Any]) -> Result:
+def load_partial(part: Path, cfg: Config, current: Mapping[str, Any]) -> tuple[Result, dict]:
     """Check and read the partial result in ``part`` for the configuration ``cfg``.
 
     Parameters
@@ -297,14 +259,15 @@ def load_partial(part: Path, cfg: Config, current: Mapping[str, Any]) -> Result:
 
     Returns
     -------
-    Result
-        The finished levels, ready for ``simulate(..., resume=...)``.
+    (Result, dict)
+        The finished levels, ready for ``simulate(..., resume=...)``, and the solver
+        options they were computed with.
 
     Raises
     ------
     ResumeError
-        If ``part`` is missing, not a partial result of vemwear, made from other
-        inputs (the message lists what changed) or does not fit the problem.
+        If ``part`` is missing, not a partial result of vemwear, made from another
+        problem (the message lists what changed) or does not fit the problem.
     """
     from ..post.results import FORMAT, load_result, load_summary, result_from_arrays
 
@@ -325,18 +288,18 @@ def load_partial(part: Path, cfg: Config, current: Mapping[str, Any]) -> Result:
     extra = summary.get("inputs", {}).get("extra", {})
     stored = extra.get("resume", {}) if isinstance(extra, dict) else {}
     if stored.get("inputs_sha256") != current["inputs_sha256"]:
-        diffs = _differences(stored.get("fingerprint", {}), current["fingerprint"])
-        what = "; ".join(diffs) if diffs else "the stored hash does not match"
+        diffs = differences(stored.get("fingerprint", {}), current["fingerprint"])
+        what = "; ".join(diffs) if diffs else "the stored fingerprint does not match"
         raise ResumeError(
-            f"--resume refused: {part} was computed from other inputs ({what}); restore the "
-            "inputs of the stopped run, or start over without --resume and with --force"
+            f"--resume refused: {part} was computed from another problem ({what}); restore "
+            "the inputs of the stopped run, or start over without --resume and with --force"
         )
     try:
         arrays = load_result(part)
         result = result_from_arrays(cfg.problem, arrays, solver=summary.get("solver"))
     except (OSError, ValueError, KeyError) as exc:
         raise ResumeError(f"--resume: {part}/result.npz cannot be used: {exc}") from None
-    return result
+    return result, dict(summary.get("solver") or {})
 
 
 # ---------------------------------------------------------------------------- running
@@ -357,9 +320,11 @@ class RunPlan:
     solver : SolverOptions
         The effective solver options.
     force : bool
-        ``--force``.
+        Replace an existing output directory.
     previous : Result or None
-        The partial result to resume from (``--resume``).
+        The partial result to resume from.
+    previous_solver : dict
+        The solver options of the partial result (recorded in ``summary.json``).
     resume_info : dict
         ``inputs_sha256``, ``config_sha256`` and ``fingerprint`` of this run.
     command : str
@@ -373,6 +338,7 @@ class RunPlan:
     solver: SolverOptions
     force: bool
     previous: Result | None = None
+    previous_solver: dict[str, Any] = field(default_factory=dict)
     resume_info: dict[str, Any] = field(default_factory=dict)
     command: str = ""
 
@@ -387,10 +353,10 @@ def prepare_run(
     resume: bool = False,
     solver_flag: str | None = None,
 ) -> RunPlan:
-    """Everything ``vemwear run`` checks before solving: the partial result, ``--resume``.
+    """Everything a run checks before solving: the output place, the partial result.
 
-    Without ``--resume`` an existing ``OUTDIR.partial`` is refused unless ``--force``
-    (which replaces it); with ``--resume`` it must exist and match the inputs.
+    Without ``resume`` an existing ``OUTDIR.partial`` is refused unless ``force``
+    (which replaces it); with ``resume`` it must exist and hold the same problem.
 
     Raises
     ------
@@ -399,10 +365,10 @@ def prepare_run(
     """
     part = partial_path(out)
     check_output_dir(part, force=True, protect=[config_path])
-    fp = fingerprint(cfg, solver)
+    fp = cfg.problem.fingerprint()
     info = {
-        "inputs_sha256": inputs_sha256(fp),
-        "config_sha256": _sha256_file(config_path),
+        "inputs_sha256": sha256_json(fp),
+        "config_sha256": sha256_file(config_path),
         "fingerprint": fp,
     }
     plan = RunPlan(
@@ -416,7 +382,7 @@ def prepare_run(
         command=_resume_command(config_path, out, solver_flag),
     )
     if resume:
-        plan.previous = load_partial(part, cfg, info)
+        plan.previous, plan.previous_solver = load_partial(part, cfg, info)
     elif (part.exists() or part.is_symlink()) and not force:
         raise ResumeError(
             f"{part} holds the finished levels of a stopped run; continue it with --resume, "
@@ -442,6 +408,7 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result:
     }
     if plan.previous is not None:
         extra["resumed_from_level"] = int(plan.previous.completed)
+        extra["previous_solver"] = plan.previous_solver
     done: list[Result] = []
     try:
         with atomic_output_dir(plan.out, plan.force) as tmp:
@@ -467,22 +434,25 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result:
 
 def _keep(plan: RunPlan, partial: Result, exc: BaseException) -> None:
     """Save the partial result; attach a one-line note to ``exc``."""
+    from .signals import saving
+
     c, L = int(partial.completed), len(partial.t)
     try:
-        save_partial(
-            partial,
-            plan.part,
-            reason=_reason(exc),
-            cfg=plan.cfg,
-            config_path=plan.config_path,
-            resume_info=plan.resume_info,
-            command=plan.command,
-        )
+        with saving(reraise=False):
+            save_partial(
+                partial,
+                plan.part,
+                reason=_reason(exc),
+                cfg=plan.cfg,
+                config_path=plan.config_path,
+                resume_info=plan.resume_info,
+                command=plan.command,
+            )
         note = (
             f"; the {c} finished time levels (of {L}) are saved in {plan.part}; "
             f"continue with: {plan.command}"
         )
-    except Exception as err:  # a second failure must not hide the first one
+    except BaseException as err:  # a second failure must not hide the first one
         note = f"; the {c} finished time levels could not be saved ({type(err).__name__}: {err})"
     try:
         exc.vemwear_note = note  # type: ignore[attr-defined]

@@ -1,0 +1,108 @@
+"""What every ``vemwear`` subcommand shares: exit codes, the help layout, printing rows.
+
+Nothing here imports NumPy or the library: ``vemwear --help`` and ``--version`` stay fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+__all__ = [
+    "EPILOG",
+    "EXIT_CONVERGENCE",
+    "EXIT_INPUT",
+    "EXIT_INTERNAL",
+    "EXIT_INTERRUPTED",
+    "EXIT_OK",
+    "PROG",
+    "UsageError",
+    "add_debug_option",
+    "add_subcommand",
+    "positive_int",
+    "rows_text",
+    "say",
+]
+
+EXIT_OK = 0
+EXIT_INTERNAL = 1
+EXIT_INPUT = 2
+EXIT_CONVERGENCE = 3
+EXIT_INTERRUPTED = 130
+
+PROG = "vemwear"
+EPILOG = """\
+exit codes:
+  0    success
+  1    unexpected internal error (rerun with --debug for a traceback)
+  2    invalid input: configuration file, mesh, data, output directory or arguments
+       (also a refused --resume)
+  3    a solver did not converge (no output directory is left behind)
+  130  interrupted (Ctrl-C, SIGTERM or SIGHUP; no output directory is left behind)
+
+If `run` stops after finishing some time levels (codes 1, 3, 130), they are saved
+in OUTDIR.partial/ (see its PARTIAL.txt); `vemwear run CONFIG -o OUTDIR --resume`
+continues from there and gives the same result as an uninterrupted run.
+
+The configuration file format is documented in docs/config.md.
+"""
+
+
+class UsageError(ValueError):
+    """Arguments that do not go together (exit code 2)."""
+
+
+def _formatter(prog: str) -> argparse.HelpFormatter:
+    return argparse.RawDescriptionHelpFormatter(prog, max_help_position=30)
+
+
+def add_subcommand(
+    sub: argparse._SubParsersAction,  # type: ignore[type-arg]
+    name: str,
+    summary: str,
+    description: str | None = None,
+) -> argparse.ArgumentParser:
+    """A subcommand parser with the common help layout (``summary`` is its ``--help`` line)."""
+    return sub.add_parser(  # type: ignore[no-any-return]
+        name,
+        help=summary,
+        description=summary if description is None else description,
+        epilog=EPILOG,
+        formatter_class=_formatter,
+    )
+
+
+def top_parser(description: str) -> argparse.ArgumentParser:
+    """The ``vemwear`` parser itself (same layout as the subcommands)."""
+    return argparse.ArgumentParser(
+        prog=PROG, description=description, epilog=EPILOG, formatter_class=_formatter
+    )
+
+
+def add_debug_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--debug", action="store_true", help="print the full traceback on errors")
+
+
+def positive_int(text: str) -> int:
+    """An argparse type: a positive integer."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return v
+
+
+def rows_text(rows: Sequence[tuple[str, str]]) -> str:
+    """Two aligned columns, indented by two spaces."""
+    if not rows:
+        return ""
+    w = max(len(a) for a, _ in rows)
+    return "\n".join(f"  {a:<{w}}  {b}" for a, b in rows)
+
+
+def say(msg: str) -> None:
+    """A line on standard error."""
+    print(msg, file=sys.stderr, flush=True)

@@ -1,0 +1,64 @@
+"""Running a validated configuration: the output directory, partial results, resume.
+
+The layer between the clients (``vemwear`` command, the paper's examples) and the
+library: it takes a :class:`vemwear.config.Config`, checks where the run writes,
+solves it with :func:`vemwear.simulate.simulate`, writes the standard files through
+:func:`vemwear.post.outputs.write_outputs`, keeps the finished levels of a stopped
+run and resumes it.
+
+- :mod:`~vemwear.runner.outdir`: the output directory (checks, atomic writing).
+- :mod:`~vemwear.runner.run`: :func:`prepare_run`, :func:`execute_run`, partial
+  results and ``--resume``.
+- :mod:`~vemwear.runner.signals`: SIGTERM and SIGHUP like Ctrl-C; protected saves.
+- :mod:`~vemwear.runner.describe`: what ``check`` and ``run`` report.
+
+Names are imported on first use, so that importing the package stays cheap.
+"""
+
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .describe import check_rows, result_rows, smallness_report
+    from .outdir import OutputDirError, atomic_output_dir, check_output_dir
+    from .run import ResumeError, RunPlan, execute_run, partial_path, prepare_run
+    from .signals import Terminated, signals_as_interrupts
+
+_WHERE = {
+    "check_rows": "describe",
+    "result_rows": "describe",
+    "smallness_report": "describe",
+    "OutputDirError": "outdir",
+    "atomic_output_dir": "outdir",
+    "check_output_dir": "outdir",
+    "ResumeError": "run",
+    "RunPlan": "run",
+    "execute_run": "run",
+    "partial_path": "run",
+    "prepare_run": "run",
+    "Terminated": "signals",
+    "signals_as_interrupts": "signals",
+}
+__all__ = [
+    "OutputDirError",
+    "ResumeError",
+    "RunPlan",
+    "Terminated",
+    "atomic_output_dir",
+    "check_output_dir",
+    "check_rows",
+    "execute_run",
+    "partial_path",
+    "prepare_run",
+    "result_rows",
+    "signals_as_interrupts",
+    "smallness_report",
+]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _WHERE:
+        return getattr(import_module(f".{_WHERE[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

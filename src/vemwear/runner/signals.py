@@ -1,0 +1,100 @@
+"""Signals of a run: SIGTERM and SIGHUP stop it like Ctrl-C; saving is not abandoned lightly.
+
+:func:`signals_as_interrupts` turns SIGTERM (a ``kill``, a batch system's time limit)
+and SIGHUP (a closed terminal) into :class:`Terminated`, a ``KeyboardInterrupt``, so
+that a run stops through the same path as after Ctrl-C and keeps its finished levels.
+:func:`saving` marks the section that writes them: a signal arriving then does not
+abandon the save; it is remembered (and a line says so), and only the second one
+arriving during the save abandons it.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+__all__ = ["Terminated", "saving", "signals_as_interrupts", "stop_reason"]
+
+_NAMES = {"SIGTERM": "terminated (SIGTERM)", "SIGHUP": "hung up (SIGHUP)"}
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, handled like Ctrl-C; ``signame`` says which."""
+
+    def __init__(self, signame: str = "SIGTERM") -> None:
+        super().__init__(signame)
+        self.signame = signame
+
+
+class _State:
+    depth = 0  # nesting of saving()
+    pending: BaseException | None = None  # the first signal received while saving
+    count = 0  # signals received while saving
+
+
+def stop_reason(exc: BaseException) -> str | None:
+    """``"interrupted (Ctrl-C)"``, ``"terminated (SIGTERM)"``, ... for a stop by a signal."""
+    if isinstance(exc, Terminated):
+        return _NAMES.get(exc.signame, f"stopped ({exc.signame})")
+    if isinstance(exc, KeyboardInterrupt):
+        return "interrupted (Ctrl-C)"
+    return None
+
+
+def _handler(signum: int, frame: Any) -> None:
+    name = signal.Signals(signum).name
+    exc: BaseException = KeyboardInterrupt() if name == "SIGINT" else Terminated(name)
+    if _State.depth == 0:
+        raise exc
+    _State.count += 1
+    if _State.count >= 2:  # the second signal during the save abandons it
+        raise exc
+    if _State.pending is None:
+        _State.pending = exc
+    print(
+        "vemwear: saving the finished levels; please wait (once more to abandon the save)",
+        file=sys.stderr,
+        flush=True,
+    )
+
+
+@contextmanager
+def signals_as_interrupts() -> Iterator[None]:
+    """Install the handlers of SIGINT, SIGTERM and SIGHUP (main thread only), restore after."""
+    old: dict[int, Any] = {}
+    try:
+        for name in ("SIGINT", "SIGTERM", "SIGHUP"):
+            sig = getattr(signal, name, None)
+            if sig is not None:
+                old[sig] = signal.signal(sig, _handler)
+    except ValueError:  # not the main thread
+        pass
+    try:
+        yield
+    finally:
+        for sig, h in old.items():
+            signal.signal(sig, h)
+
+
+@contextmanager
+def saving(reraise: bool = True) -> Iterator[None]:
+    """A section that a first signal does not interrupt.
+
+    Parameters
+    ----------
+    reraise : bool
+        Raise the signal received during the section at its end (a periodic
+        checkpoint); False when the run is stopping anyway (the final save).
+    """
+    _State.depth += 1
+    try:
+        yield
+    finally:
+        _State.depth -= 1
+        if _State.depth == 0:
+            pending, _State.pending, _State.count = _State.pending, None, 0
+            if pending is not None and reraise:
+                raise pending
