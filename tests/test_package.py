@@ -13,12 +13,6 @@ import vemwear
 
 API = [n for n in vemwear.__all__ if n != "__version__"]
 
-#: Names whose docstrings live in modules changed elsewhere right now
-#: (vemwear/simulate/loop.py); they are expected to fail until those are completed,
-#: and the strict xfail reports it when they pass.
-PENDING = {"simulate", "Result"}
-
-
 def test_import_is_cheap_and_names_resolve_lazily() -> None:
     code = (
         "import sys, vemwear; heavy = [m for m in ('numpy', 'scipy', 'vemwear.simulate') "
@@ -109,14 +103,6 @@ def _check(name: str) -> None:
         assert desc, f"{name}: {p} has no description"
 
 
-@pytest.mark.parametrize(
-    "name",
-    [
-        pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="simulate/loop.py"))
-        if n in PENDING
-        else n
-        for n in API
-    ],
-)
+@pytest.mark.parametrize("name", API)
 def test_every_top_level_name_has_a_numpydoc_docstring(name: str) -> None:
     _check(name)

@@ -22,6 +22,9 @@ whose ``[mesh]`` and ``[boundary]`` sections give the tagged mesh. Output files 
 written atomically (through a temporary file in the same directory) and an existing
 file is replaced only with ``--force``. Invalid input is reported as one line and
 exit code 2, as for the other commands (:mod:`vemwear.cli.main`).
+
+The module is one job, the arguments and output of the four ``mesh`` subcommands;
+the work itself is in :mod:`vemwear.mesh`.
 """
 
 from __future__ import annotations

@@ -30,7 +30,7 @@ import math
 import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -366,7 +366,7 @@ def _check(
 def _evaluate(node: ast.expr, env: dict[str, NDArray[np.float64]]) -> Any:
     """Evaluate a checked tree (only the node kinds accepted by :func:`_check`)."""
     if isinstance(node, ast.Constant):
-        return np.float64(node.value)
+        return np.float64(cast(float, node.value))
     if isinstance(node, ast.Name):
         if node.id in env:
             return env[node.id]

@@ -20,6 +20,7 @@ from .compare import (
     convergence_orders,
     solution_errors,
 )
+from .maps import plot_deformed, plot_displacement
 from .norms import (
     ProjectedNorms,
     contact_l2_norm,
@@ -32,8 +33,6 @@ from .plots import (
     QUANTITIES,
     compare_profiles,
     plot_contact_profiles,
-    plot_deformed,
-    plot_displacement,
     plot_time_history,
 )
 from .results import (

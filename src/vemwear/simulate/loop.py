@@ -64,19 +64,42 @@ class SolverOptions:
 class Result:
     """Solution at every time level.
 
-    Attributes
+    Parameters
     ----------
-    t : (L,) time levels
-    points : (n_points, 2) vertex coordinates
-    u : (S, n_points, 2) displacement at the stored levels ``u_levels`` (all by default)
-    u_levels : (S,) indices of the levels whose displacement is stored
-    contact_nodes : (m,) vertex ids on Gamma_C, ordered along it
-    contact_s : (m,) arc length along Gamma_C; contact_points : (m, 2)
-    wear, u_nu, penetration, p_rigid, p_soft : (L, m) at contact nodes; penetration =
-        u_nu - wear; p_rigid and p_soft are the pressures of the rigid and the soft layer
-    iterations : (L,) solver iterations per level
-    residuals : (L, 3) KKT residuals (equilibrium, feasibility, complementarity)
-    completed : number of finished levels (``L`` unless the run was interrupted)
+    problem : Problem
+        The problem that was solved.
+    t : (L,) ndarray
+        The time levels.
+    points : (n_points, 2) ndarray
+        Vertex coordinates.
+    u : (S, n_points, 2) ndarray
+        Displacement at the stored levels ``u_levels``.
+    contact_nodes : (m,) ndarray of int
+        Vertex ids on Gamma_C, ordered along it.
+    contact_s : (m,) ndarray
+        Arc length along Gamma_C.
+    contact_points : (m, 2) ndarray
+        Coordinates of the contact nodes.
+    wear : (L, m) ndarray
+        Wear w at the contact nodes.
+    u_nu : (L, m) ndarray
+        Normal displacement at the contact nodes (``penetration = u_nu - wear``).
+    p_rigid : (L, m) ndarray
+        Pressure of the rigid layer (the multiplier of u_nu <= g).
+    p_soft : (L, m) ndarray
+        Pressure of the soft layer, p(u_nu - w).
+    iterations : (L,) ndarray of int
+        Solver iterations per level.
+    residuals : (L, 3) ndarray
+        KKT residuals (equilibrium, feasibility, complementarity) per level.
+    u_levels : (S,) ndarray of int
+        Indices of the levels whose displacement is stored.
+    completed : int
+        Number of finished levels (``L`` unless the run was interrupted; -1 means L).
+    solver : dict
+        The solver options the levels were computed with.
+    timings : dict
+        Wall times of the stages, in seconds.
     """
 
     problem: Problem
@@ -150,6 +173,19 @@ def simulate(
 
     Parameters
     ----------
+    problem : Problem
+        The problem: mesh, material, loads, contact data and time grid.
+    solver : SolverOptions or str
+        The solver of the step problems, or just its method (``"newton"``,
+        ``"newton-full"``, ``"uzawa"``).
+    progress : bool
+        Show a progress bar over the time levels.
+    store : {"all", "final"} or array_like of float
+        The levels whose full displacement is recovered and kept.
+    recover_block : int
+        Number of levels whose displacements the condensed solver recovers together.
+    callback : callable, optional
+        ``callback(n, step_solution)`` after each level ``n``.
     resume : Result, optional
         A partial result of the same problem (``completed < len(t)``); the run goes on
         from its first unfinished level, warm-started as an uninterrupted run would

@@ -9,7 +9,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import scipy.sparse as sp
@@ -75,11 +75,12 @@ class Problem:
     def __post_init__(self) -> None:
         if not isinstance(self.v_star, FoundationVelocity):
             object.__setattr__(self, "v_star", FoundationVelocity(self.v_star))
+        v_star = cast(FoundationVelocity, self.v_star)
         check_mesh(self.mesh, require=("clamped", "contact"))
         scale = float(max(np.abs(self.nodal["g"]).max(), 1e-300))  # validates g, mu, kappa
         check_law(self.p, scale=scale)
         for level, t in enumerate(self.time.t):
-            if np.linalg.norm(self.v_star(t)) == 0.0:
+            if np.linalg.norm(v_star(t)) == 0.0:
                 raise ValueError(
                     f"v_star vanishes at t = {t:g} (level {level}); H0(c) needs v* != 0"
                 )

@@ -80,7 +80,7 @@ class ContactSystem:
     def n_free(self) -> int:
         return self.K.shape[0]
 
-    def layer_forces(self, p_rigid: NDArray, p_soft: NDArray, fric: NDArray) -> NDArray:
+    def layer_forces(self, p_rigid: NDArray | float, p_soft: NDArray, fric: NDArray) -> NDArray:
         """Nodal forces of the rigid and the soft layer,
         ``N^T(weights (p_soft + p_rigid)) + Tau^T(weights fric p_soft)``."""
         return self.N.T @ (self.weights * (p_soft + p_rigid)) + self.Tau.T @ (
