@@ -13,6 +13,7 @@ import vemwear
 
 API = [n for n in vemwear.__all__ if n != "__version__"]
 
+
 def test_import_is_cheap_and_names_resolve_lazily() -> None:
     code = (
         "import sys, vemwear; heavy = [m for m in ('numpy', 'scipy', 'vemwear.simulate') "
