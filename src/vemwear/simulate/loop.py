@@ -2,18 +2,17 @@
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from tqdm.auto import tqdm
 
-from ..solvers import SOLVERS, NewtonOptions, StepSolution, UzawaOptions, kkt_residuals
-from ..solvers.system import StepData, check_converged
+from ..solvers import SOLVERS, NewtonOptions, StepSolution, UzawaOptions
+from .levels import RESIDUAL_NAMES, run_levels
 from .problem import Problem
+from .stream import LoopState, StoragePlan
 
 
 @dataclass(frozen=True)
@@ -96,6 +95,8 @@ class Result:
         Indices of the levels whose displacement is stored.
     completed : int
         Number of finished levels (``L`` unless the run was interrupted; -1 means L).
+    levels : (K,) ndarray of int, optional
+        The levels whose contact arrays are kept (rows of ``wear`` ...); default: all.
     solver : dict
         The solver options the levels were computed with.
     timings : dict
@@ -117,10 +118,11 @@ class Result:
     residuals: NDArray[np.float64]
     u_levels: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
     completed: int = -1
+    levels: NDArray[np.int64] | None = None
     solver: dict[str, Any] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
 
-    RESIDUAL_NAMES = ("equilibrium", "feasibility", "complementarity")
+    RESIDUAL_NAMES = RESIDUAL_NAMES
 
     @property
     def penetration(self) -> NDArray[np.float64]:
@@ -129,6 +131,8 @@ class Result:
     def __post_init__(self) -> None:
         if self.completed < 0:
             self.completed = len(self.t)
+        if self.levels is None:
+            self.levels = np.arange(len(self.wear), dtype=np.int64)
 
     @property
     def is_partial(self) -> bool:
@@ -157,6 +161,7 @@ def simulate(
     *,
     progress: bool = False,
     store: str | ArrayLike = "all",
+    every: int = 1,
     recover_block: int = 32,
     resume: Result | None = None,
     callback: Callable[[int, StepSolution], None] | None = None,
@@ -167,9 +172,11 @@ def simulate(
     from level ``n - 1``; then ``w^{n+1} = w^n + k_n alpha(t_n) p(u_nu^n - w^n)``
     (left rectangle rule, 3.22), with ``w^0 = 0`` (3.23).
 
-    The contact quantities are kept at every level. The full displacement costs a
-    back-substitution per level with the condensed solver, so ``store`` chooses
-    where it is recovered: ``"all"``, ``"final"``, or a list of times (levels).
+    The contact quantities are kept at every level (or every ``every``-th). The full
+    displacement costs a back-substitution per level with the condensed solver, so
+    ``store`` chooses where it is recovered: ``"all"``, ``"final"``, or a list of times
+    (levels). The result is kept in memory; the command line streams long runs to disk
+    instead (:func:`vemwear.simulate.levels.run_levels` with a file sink).
 
     Parameters
     ----------
@@ -182,14 +189,21 @@ def simulate(
         Show a progress bar over the time levels.
     store : {"all", "final"} or array_like of float
         The levels whose full displacement is recovered and kept.
+    every : int
+        Keep the contact arrays of every ``every``-th level (and of the final level and
+        the levels of ``store``); 1 keeps all.
     recover_block : int
         Number of levels whose displacements the condensed solver recovers together.
-    callback : callable, optional
-        ``callback(n, step_solution)`` after each level ``n``.
     resume : Result, optional
         A partial result of the same problem (``completed < len(t)``); the run goes on
         from its first unfinished level, warm-started as an uninterrupted run would
         be, so the result is the same.
+    callback : callable, optional
+        ``callback(n, step_solution)`` after each level ``n``.
+
+    Returns
+    -------
+    Result
 
     Raises
     ------
@@ -201,134 +215,105 @@ def simulate(
         ``completed`` set) before it propagates.
     """
     opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
-    timings: dict[str, float] = {}
-    t0 = time.perf_counter()
-    d = problem.discrete
-    sysm = d.system
-    timings["assembly"] = time.perf_counter() - t0
-    t1 = time.perf_counter()
-    step_solver = opts.build(sysm)
-    timings["setup"] = time.perf_counter() - t1
-    for k, v in getattr(getattr(step_solver, "factor", None), "timings", {}).items():
-        timings[f"setup_{k}"] = v
-
-    tgrid = problem.time.t
-    L, m = len(tgrid), sysm.m
-    nv = problem.mesh.n_points
+    L = len(problem.time.t)
     if isinstance(store, str):
         if store not in ("all", "final"):
             raise ValueError(f"store must be 'all', 'final' or a list of times, got {store!r}")
         u_levels = np.arange(L) if store == "all" else np.array([L - 1])
     else:
-        u_levels = np.unique(problem.time.index(store))
-    out = Result(
-        problem=problem,
-        t=np.array(tgrid),
-        points=problem.mesh.points.copy(),
-        u=np.zeros((len(u_levels), nv, 2)),
-        contact_nodes=d.contact.nodes.copy(),
-        contact_s=d.contact.s.copy(),
-        contact_points=d.contact.points.copy(),
-        wear=np.zeros((L, m)),
-        u_nu=np.zeros((L, m)),
-        p_rigid=np.zeros((L, m)),
-        p_soft=np.zeros((L, m)),
-        iterations=np.zeros(L, dtype=np.int64),
-        residuals=np.zeros((L, 3)),
-        u_levels=u_levels,
-        solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
-        timings=timings,
-        completed=0,
-    )
-    slot = -np.ones(L, dtype=np.int64)
-    slot[u_levels] = np.arange(len(u_levels))
-    w = np.zeros(m)
-    guess: StepSolution | None = None
+        u_levels = problem.time.index(store)
+    plan = StoragePlan.make(L, u_levels, every)
+    sink = MemorySink(problem, plan, opts)
+    start = None
     if resume is not None:
-        w, guess = _restart(out, resume, slot, d)
-
-    # with the condensed solver, full displacements are recovered in blocks of levels
-    batch = hasattr(step_solver, "recover_many")
-    pending: list[tuple[int, StepData, StepSolution]] = []
-
-    def flush() -> None:
-        if not pending:
-            return
-        X = step_solver.recover_many(
-            [st for _, st, _ in pending],
-            [so.p_rigid for _, _, so in pending],
-            [so.p_soft for _, _, so in pending],
-        )
-        for j, (n_, st, so) in enumerate(pending):
-            full = kkt_residuals(sysm, st, X[:, j], so.p_rigid)
-            check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)
-            out.u[slot[n_]] = d.full_displacement(X[:, j])
-            out.residuals[n_] = [full[k] for k in Result.RESIDUAL_NAMES]
-        pending.clear()
-
-    t2 = time.perf_counter()
+        if every != 1 or resume.levels is None or len(resume.levels) != len(resume.t):
+            raise ValueError("resume: needs results that keep every level (every = 1)")
+        start = _restart(sink.result, resume, problem)
     try:
-        bar = tqdm(
-            range(out.completed, L),
-            desc="time levels",
-            unit="lvl",
-            disable=not progress,
-            leave=False,
+        run_levels(
+            problem,
+            opts,
+            sink,
+            plan,
+            start=start,
+            progress=progress,
+            recover_block=recover_block,
+            callback=callback,
+            timings=sink.result.timings,
         )
-        for n in bar:
-            step = d.step_data(n, w)
-            store_here = bool(slot[n] >= 0)
-            sol = step_solver.solve(step, guess, recover=store_here and not batch)
-            out.wear[n], out.u_nu[n] = w, sol.u_nu
-            out.p_rigid[n], out.p_soft[n] = sol.p_rigid, sol.p_soft
-            out.iterations[n] = sol.iterations
-            out.residuals[n] = [sol.residuals[k] for k in Result.RESIDUAL_NAMES]
-            if store_here:
-                if sol.u is not None:
-                    out.u[slot[n]] = d.full_displacement(sol.u)
-                else:
-                    pending.append((n, step, sol))
-                    # blocks at fixed positions among the stored levels: a resumed run
-                    # recovers the same blocks, so its results are bitwise the same
-                    if slot[n] % recover_block == recover_block - 1:
-                        flush()
-            if callback is not None:
-                callback(n, sol)
-            if n + 1 < L:  # wear update (3.22), left rectangle rule
-                w = w + (tgrid[n + 1] - tgrid[n]) * d.alpha(step.t) * sol.p_soft
-            guess = sol
-            if not pending:  # every level so far is complete, displacements included
-                out.completed = n + 1
-        flush()
-        out.completed = L
     except BaseException as exc:
-        # levels whose displacement block is not recovered yet count as unfinished
-        timings["time_loop"] = time.perf_counter() - t2
-        exc.partial_result = _truncate(out)  # type: ignore[attr-defined]
+        state: LoopState | None = getattr(exc, "loop_state", None)
+        done = state.complete_upto if state is not None else sink.result.completed
+        exc.partial_result = _truncate(sink.result, done)  # type: ignore[attr-defined]
         raise
-    timings["time_loop"] = time.perf_counter() - t2
-    timings["total"] = time.perf_counter() - t0
-    return out
+    sink.result.completed = L
+    return sink.result
 
 
-def _truncate(r: Result) -> Result:
-    """The partial result: levels ``< completed`` are kept, the later ones set to zero
+class MemorySink:
+    """A :class:`~vemwear.simulate.stream.LevelSink` that fills a :class:`Result`."""
+
+    def __init__(self, problem: Problem, plan: StoragePlan, opts: SolverOptions) -> None:
+        d = problem.discrete
+        K, m, nv = len(plan.levels), d.system.m, problem.mesh.n_points
+        self.row, self.slot = plan.slots()
+        self.result = Result(
+            problem=problem,
+            t=np.array(problem.time.t),
+            points=problem.mesh.points.copy(),
+            u=np.zeros((len(plan.u_levels), nv, 2)),
+            contact_nodes=d.contact.nodes.copy(),
+            contact_s=d.contact.s.copy(),
+            contact_points=d.contact.points.copy(),
+            wear=np.zeros((K, m)),
+            u_nu=np.zeros((K, m)),
+            p_rigid=np.zeros((K, m)),
+            p_soft=np.zeros((K, m)),
+            iterations=np.zeros(K, dtype=np.int64),
+            residuals=np.zeros((K, 3)),
+            u_levels=plan.u_levels.copy(),
+            solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
+            completed=0,
+            levels=plan.levels.copy(),
+        )
+
+    def level(self, n: int, w: NDArray[np.float64], solution: StepSolution) -> None:
+        r, out = self.row[n], self.result
+        if r < 0:
+            return
+        out.wear[r], out.u_nu[r] = w, solution.u_nu
+        out.p_rigid[r], out.p_soft[r] = solution.p_rigid, solution.p_soft
+        out.iterations[r] = solution.iterations
+        out.residuals[r] = [solution.residuals[k] for k in RESIDUAL_NAMES]
+
+    def displacement(
+        self, n: int, u: NDArray[np.float64], residuals: NDArray[np.float64] | None
+    ) -> None:
+        self.result.u[self.slot[n]] = u
+        if residuals is not None and self.row[n] >= 0:
+            self.result.residuals[self.row[n]] = residuals
+
+    def checkpoint(self, state: LoopState) -> None:
+        self.result.completed = state.complete_upto
+
+
+def _truncate(r: Result, c: int) -> Result:
+    """The partial result: levels ``< c`` are kept, the later ones set to zero
     (a level whose displacement block was not recovered yet may hold values)."""
-    c = r.completed
+    levels = r.levels if r.levels is not None else np.arange(len(r.wear))
     keep = r.u_levels < c
     arrays = {
         k: getattr(r, k).copy()
         for k in ("wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals")
     }
     for a in arrays.values():
-        a[c:] = 0
-    return replace(r, u=r.u[keep].copy(), u_levels=r.u_levels[keep].copy(), **arrays)
+        a[levels >= c] = 0
+    return replace(r, u=r.u[keep].copy(), u_levels=r.u_levels[keep].copy(), completed=c, **arrays)
 
 
-def _restart(
-    out: Result, prev: Result, slot: NDArray[np.int64], d
-) -> tuple[NDArray, StepSolution | None]:
-    """Copy the finished levels of ``prev`` into ``out``; return w and the warm start."""
+def _restart(out: Result, prev: Result, problem: Problem) -> LoopState:
+    """Copy the finished levels of ``prev`` into ``out``; the state to go on from."""
+    d = problem.discrete
     c = int(prev.completed)
     if len(prev.t) != len(out.t) or not np.array_equal(prev.t, out.t):
         raise ValueError("resume: the partial result has another time grid")
@@ -337,9 +322,11 @@ def _restart(
     ):
         raise ValueError("resume: the partial result has other contact nodes (another mesh?)")
     if c <= 0:
-        return np.zeros(out.wear.shape[1]), None
+        return LoopState(0, np.zeros(out.wear.shape[1]))
     for name in ("wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals"):
         getattr(out, name)[:c] = getattr(prev, name)[:c]
+    slot = -np.ones(len(out.t), dtype=np.int64)
+    slot[out.u_levels] = np.arange(len(out.u_levels))
     for j, lv in enumerate(prev.u_levels):
         if lv < c and slot[lv] >= 0:
             out.u[slot[lv]] = prev.u[j]
@@ -350,7 +337,7 @@ def _restart(
         )
     out.completed = c
     if c == len(out.t):
-        return out.wear[-1].copy(), None
+        return LoopState(c, out.wear[-1].copy())
     w = (
         out.wear[c - 1]
         + (out.t[c] - out.t[c - 1]) * d.alpha(float(out.t[c - 1])) * out.p_soft[c - 1]
@@ -366,4 +353,4 @@ def _restart(
         iterations=0,
         residuals={},
     )
-    return w, guess
+    return LoopState(c, w, guess)

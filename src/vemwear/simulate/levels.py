@@ -1,0 +1,168 @@
+"""The time loop of the fully discrete scheme (paper 3.21-3.23), streaming its levels.
+
+:func:`run_levels` solves the step problem (3.21) of each level with ``w^n`` fixed,
+hands the level to a :class:`~vemwear.simulate.stream.LevelSink`, and updates the
+wear by the left rectangle rule (3.22). It keeps only the state of the last level
+(:class:`~vemwear.simulate.stream.LoopState`), so its memory does not depend on the
+number of levels. Every ``checkpoint`` seconds it asks the sink to make the levels so
+far durable together with that state; a run started again from the state gives the
+same numbers, bitwise, as one that never stopped.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from ..solvers import StepSolution, kkt_residuals
+from ..solvers.system import StepData, check_converged
+from .stream import LevelSink, LoopState, Pending, StoragePlan
+
+if TYPE_CHECKING:
+    from .loop import SolverOptions
+    from .problem import Problem
+
+__all__ = ["RESIDUAL_NAMES", "run_levels"]
+
+#: The KKT residuals of every step, in the order of the result arrays.
+RESIDUAL_NAMES = ("equilibrium", "feasibility", "complementarity")
+
+
+def run_levels(
+    problem: Problem,
+    opts: SolverOptions,
+    sink: LevelSink,
+    plan: StoragePlan,
+    *,
+    start: LoopState | None = None,
+    progress: bool = False,
+    recover_block: int = 32,
+    checkpoint: float = 0.0,
+    callback: Callable[[int, StepSolution], None] | None = None,
+    timings: dict[str, float] | None = None,
+) -> LoopState:
+    """Solve the levels ``start.completed, ..., L - 1`` and hand each to ``sink``.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem.
+    opts : SolverOptions
+        The step solver.
+    sink : LevelSink
+        Receives every level, the recovered displacements and the checkpoints.
+    plan : StoragePlan
+        The levels whose displacement is recovered (``plan.u_levels``).
+    start : LoopState, optional
+        Go on from this state (a checkpoint) instead of level 0.
+    progress : bool
+        Show a progress bar.
+    recover_block : int
+        The condensed solver recovers displacements in blocks of this many stored
+        levels, at fixed positions among them, so that a resumed run recovers the same
+        blocks (and gets bitwise the same numbers).
+    checkpoint : float
+        Seconds between calls of ``sink.checkpoint`` (0: never during the loop).
+    callback : callable, optional
+        ``callback(n, solution)`` after each level.
+    timings : dict, optional
+        Filled with the wall times of assembly, setup and the loop.
+
+    Returns
+    -------
+    LoopState
+        The state after the last level.
+
+    Raises
+    ------
+    ConvergenceError
+        If a step does not reach the tolerance (the message names the level).
+    BaseException
+        Any error or interruption carries the state of the finished levels as
+        ``exc.loop_state`` before it propagates.
+    """
+    timings = {} if timings is None else timings
+    t0 = time.perf_counter()
+    d = problem.discrete
+    sysm = d.system
+    timings["assembly"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    step_solver: Any = opts.build(sysm)
+    timings["setup"] = time.perf_counter() - t1
+    for k, v in getattr(getattr(step_solver, "factor", None), "timings", {}).items():
+        timings[f"setup_{k}"] = v
+
+    tgrid = problem.time.t
+    L = len(tgrid)
+    _, slot = plan.slots()
+    state = start if start is not None else LoopState(0, np.zeros(sysm.m))
+    # (completed, w of the next level, warm start): replaced as one tuple, so that a
+    # signal arriving between two statements never sees a half-updated state
+    now: tuple[int, Any, StepSolution | None] = (state.completed, state.w, state.guess)
+    batch = hasattr(step_solver, "recover_many")
+    # (level, its w, its step data, its solution) awaiting a block of back-substitutions
+    pending: list[tuple[int, Any, StepData, StepSolution]] = [
+        (p.level, p.w, d.step_data(p.level, p.w), p.solution) for p in state.pending
+    ]
+
+    def flush() -> None:
+        if not pending:
+            return
+        X = step_solver.recover_many(
+            [st for _, _, st, _ in pending],
+            [so.p_rigid for *_, so in pending],
+            [so.p_soft for *_, so in pending],
+        )
+        for j, (n_, _, st, so) in enumerate(pending):
+            full = kkt_residuals(sysm, st, X[:, j], so.p_rigid)
+            check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)
+            res = np.array([full[k] for k in RESIDUAL_NAMES])
+            sink.displacement(n_, d.full_displacement(X[:, j]), res)
+        pending.clear()
+
+    def current() -> LoopState:
+        c, w_, g_ = now
+        return LoopState(c, w_, g_, [Pending(n_, wn, so) for n_, wn, _, so in pending if n_ < c])
+
+    t2 = time.perf_counter()
+    last_checkpoint = time.monotonic()
+    try:
+        bar = tqdm(
+            range(now[0], L), desc="time levels", unit="lvl", disable=not progress, leave=False
+        )
+        for n in bar:
+            _, w, guess = now
+            step = d.step_data(n, w)
+            store_here = bool(slot[n] >= 0)
+            sol = step_solver.solve(step, guess, recover=store_here and not batch)
+            sink.level(n, w, sol)
+            if store_here:
+                if sol.u is not None:
+                    sink.displacement(n, d.full_displacement(sol.u), None)
+                else:
+                    pending.append((n, w, step, sol))
+            if callback is not None:
+                callback(n, sol)
+            w_next = w
+            if n + 1 < L:  # wear update (3.22), left rectangle rule
+                w_next = w + (tgrid[n + 1] - tgrid[n]) * d.alpha(step.t) * sol.p_soft
+            now = (n + 1, w_next, sol)
+            # blocks at fixed positions among the stored levels: a resumed run recovers
+            # the same blocks, so its results are bitwise the same
+            if pending and slot[n] % recover_block == recover_block - 1:
+                flush()
+            if checkpoint > 0 and time.monotonic() - last_checkpoint >= checkpoint:
+                sink.checkpoint(current())
+                last_checkpoint = time.monotonic()
+        flush()
+    except BaseException as exc:
+        timings["time_loop"] = time.perf_counter() - t2
+        exc.loop_state = current()  # type: ignore[attr-defined]
+        raise
+    timings["time_loop"] = time.perf_counter() - t2
+    timings["total"] = time.perf_counter() - t0
+    return LoopState(now[0], now[1], now[2], [])
