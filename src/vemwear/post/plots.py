@@ -171,7 +171,7 @@ def _default_times(result: Result) -> list[float]:
     T = float(t[-1])
     want = [0.25 * T, 0.5 * T, 0.75 * T, T]
     try:
-        result.problem.time.index(want)
+        [result.level(x) for x in want]
         return want
     except ValueError:
         idx = np.unique(np.linspace(0, len(t) - 1, 5).round().astype(int)[1:])

@@ -17,7 +17,11 @@
     ==========================  =========  ============================================
     array                       shape      meaning
     ==========================  =========  ============================================
-    ``t``                       (L,)       time levels ``t_n`` [time]
+    ``t``                       (K,)       the kept time levels ``t_n`` [time]: all L
+                                           levels unless ``[output] every > 1``
+    ``levels``                  (K,)       the index ``n`` of each kept level in the
+                                           run's time grid (``0, 1, ..., L - 1`` when
+                                           every level is kept)
     ``points``                  (n, 2)     vertex coordinates of the reference
                                            (undeformed) mesh [length]
     ``cells_offsets``           (C + 1,)   CSR offsets of the ``C`` polygonal cells:
@@ -29,8 +33,11 @@
                                            2 traction, 3 contact, 0 untagged), in the
                                            canonical order of ``Mesh.boundary_edges``;
                                            see :func:`mesh_from_arrays`
-    ``u``                       (L, n, 2)  displacement ``u_h(t_n)`` at the vertices
-                                           (the VEM degrees of freedom) [length]
+    ``u``                       (S, n, 2)  displacement ``u_h(t_n)`` at the vertices
+                                           (the VEM degrees of freedom) at the kept
+                                           levels of ``u_levels`` [length]
+    ``u_levels``                (S,)       the rows (indices into ``t``) whose
+                                           displacement is stored
     ``contact_nodes``           (m,)       vertex ids of the contact nodes
     ``contact_s``               (m,)       arc length along Gamma_C from the start of
                                            the node's chain of contact edges [length]
@@ -42,21 +49,21 @@
                                            area (volume per unit depth)
     ``g``, ``mu``, ``kappa``    (m,)       layer thickness [length], friction and wear
                                            coefficients at the contact nodes
-    ``wear``                    (L, m)     wear ``w^n`` of the soft layer (the depth of
+    ``wear``                    (K, m)     wear ``w^n`` of the soft layer (the depth of
                                            material removed) [length]; ``w^0 = 0``
-    ``u_nu``                    (L, m)     normal displacement ``u_nu(t_n) = u . nu_a``
+    ``u_nu``                    (K, m)     normal displacement ``u_nu(t_n) = u . nu_a``
                                            [length]; the unilateral constraint is
                                            ``u_nu <= g``
-    ``penetration``             (L, m)     ``u_nu - wear``: the penetration into the
+    ``penetration``             (K, m)     ``u_nu - wear``: the penetration into the
                                            soft layer, the argument of the normal
                                            compliance ``p`` [length]
-    ``lam``                     (L, m)     pressure of the rigid layer, the multiplier
+    ``lam``                     (K, m)     pressure of the rigid layer, the multiplier
                                            of ``u_nu <= g`` (``>= 0``, zero where
                                            ``u_nu < g``) [stress]
-    ``p``                       (L, m)     pressure of the soft layer,
+    ``p``                       (K, m)     pressure of the soft layer,
                                            ``p(u_nu - wear)`` [stress]
-    ``iterations``              (L,)       solver iterations of each step problem
-    ``residuals``               (L, 3)     final scaled KKT residuals of each step, in
+    ``iterations``              (K,)       solver iterations of each step problem
+    ``residuals``               (K, 3)     final scaled KKT residuals of each step, in
                                            the order of ``residual_names``
     ``residual_names``          (3,)       ``equilibrium``, ``feasibility``,
                                            ``complementarity``
@@ -124,38 +131,66 @@ SUMMARY_NAME = "summary.json"
 FORMAT = "vemwear-result/1"
 
 
-def result_arrays(result: Result) -> dict[str, NDArray[Any]]:
-    """The arrays stored in ``result.npz`` (see the module docstring), by name."""
-    mesh = result.problem.mesh
-    cb = result.problem.contact
-    nodal = result.problem.nodal
+def static_arrays(problem: Any, plan: Any) -> dict[str, NDArray[Any]]:
+    """The arrays of ``result.npz`` that do not depend on the solution: the kept levels
+    (``plan``, a :class:`~vemwear.simulate.stream.StoragePlan`: ``t`` and ``levels`` of
+    the kept rows, ``u_levels`` the rows with a displacement), the mesh, the contact
+    nodes and their data."""
+    mesh = problem.mesh
+    cb = problem.contact
+    nodal = problem.nodal
     return {
-        "t": np.asarray(result.t, dtype=np.float64),
-        "points": np.asarray(result.points, dtype=np.float64),
+        "t": np.asarray(problem.time.t, dtype=np.float64)[plan.levels],
+        "levels": np.asarray(plan.levels, dtype=np.int64),
+        "points": np.asarray(mesh.points, dtype=np.float64),
         "cells_offsets": np.asarray(mesh.cell_offsets, dtype=np.int64),
         "cells_vertices": np.asarray(mesh.cell_vertices, dtype=np.int64),
         "boundary_tags": np.asarray(mesh.boundary_tags, dtype=np.int8),
-        "u": np.asarray(result.u, dtype=np.float64),
-        "u_levels": np.asarray(result.u_levels, dtype=np.int64),
-        "contact_nodes": np.asarray(result.contact_nodes, dtype=np.int64),
-        "contact_s": np.asarray(result.contact_s, dtype=np.float64),
-        "contact_points": np.asarray(result.contact_points, dtype=np.float64),
+        "u_levels": np.searchsorted(plan.levels, plan.u_levels).astype(np.int64),
+        "contact_nodes": np.asarray(cb.nodes, dtype=np.int64),
+        "contact_s": np.asarray(cb.s, dtype=np.float64),
+        "contact_points": np.asarray(cb.points, dtype=np.float64),
         "contact_normals": np.asarray(cb.normals, dtype=np.float64),
         "contact_weights": np.asarray(cb.weights, dtype=np.float64),
         "g": np.asarray(nodal["g"], dtype=np.float64),
         "mu": np.asarray(nodal["mu"], dtype=np.float64),
         "kappa": np.asarray(nodal["kappa"], dtype=np.float64),
-        "wear": np.asarray(result.wear, dtype=np.float64),
-        "u_nu": np.asarray(result.u_nu, dtype=np.float64),
-        "penetration": np.asarray(result.penetration, dtype=np.float64),
-        "lam": np.asarray(result.p_rigid, dtype=np.float64),
-        "p": np.asarray(result.p_soft, dtype=np.float64),
-        "iterations": np.asarray(result.iterations, dtype=np.int64),
-        "residuals": np.asarray(result.residuals, dtype=np.float64),
-        "residual_names": np.array(result.RESIDUAL_NAMES, dtype=str),
-        "completed": np.array(int(result.completed), dtype=np.int64),
+        "residual_names": np.array(("equilibrium", "feasibility", "complementarity"), dtype=str),
         "vemwear_version": np.array(__version__, dtype=str),
     }
+
+
+class _AllLevels:
+    """The storage plan of a result: its ``levels``, displacements at no level (the
+    result's own ``u_levels`` are rows already)."""
+
+    def __init__(self, result: Result) -> None:
+        self.levels = np.asarray(result.levels, dtype=np.int64)
+        self.u_levels = np.zeros(0, dtype=np.int64)
+
+
+def result_arrays(result: Result) -> dict[str, NDArray[Any]]:
+    """The arrays stored in ``result.npz`` (see the module docstring), by name."""
+    out = static_arrays(result.problem, _AllLevels(result))
+    out.update(
+        t=np.asarray(result.t, dtype=np.float64),
+        points=np.asarray(result.points, dtype=np.float64),
+        u=np.asarray(result.u, dtype=np.float64),
+        u_levels=np.asarray(result.u_levels, dtype=np.int64),
+        contact_nodes=np.asarray(result.contact_nodes, dtype=np.int64),
+        contact_s=np.asarray(result.contact_s, dtype=np.float64),
+        contact_points=np.asarray(result.contact_points, dtype=np.float64),
+        wear=np.asarray(result.wear, dtype=np.float64),
+        u_nu=np.asarray(result.u_nu, dtype=np.float64),
+        penetration=np.asarray(result.penetration, dtype=np.float64),
+        lam=np.asarray(result.p_rigid, dtype=np.float64),
+        p=np.asarray(result.p_soft, dtype=np.float64),
+        iterations=np.asarray(result.iterations, dtype=np.int64),
+        residuals=np.asarray(result.residuals, dtype=np.float64),
+        residual_names=np.array(result.RESIDUAL_NAMES, dtype=str),
+        completed=np.array(int(result.completed), dtype=np.int64),
+    )
+    return out
 
 
 def jsonable(x: Any) -> Any:
@@ -416,11 +451,17 @@ def result_from_arrays(
     if missing:
         raise ValueError(f"saved result: missing arrays {', '.join(missing)}")
     t = np.asarray(data["t"], dtype=np.float64)
-    L = len(problem.time.t)
-    if t.shape != (L,) or not np.array_equal(t, problem.time.t):
+    n_grid = len(problem.time.t)
+    levels = np.asarray(data.get("levels", np.arange(len(t))), dtype=np.int64)
+    L = len(levels)
+    if (
+        t.shape != (L,)
+        or (L and (levels.min() < 0 or levels.max() >= n_grid))
+        or not np.array_equal(t, problem.time.t[levels])
+    ):
         raise ValueError(
             f"saved result: the time levels differ from the problem's "
-            f"({len(t)} saved, {L} in the problem)"
+            f"({len(t)} saved, {n_grid} in the problem)"
         )
     pts = np.asarray(data["points"], dtype=np.float64)
     if pts.shape != problem.mesh.points.shape or not np.array_equal(pts, problem.mesh.points):
@@ -450,8 +491,12 @@ def result_from_arrays(
         raise ValueError(
             f"saved result: array 'u' has shape {u.shape}, expected ({len(u_levels)}, {n}, 2)"
         )
-    completed = int(data["completed"]) if "completed" in data else L
-    if not 0 <= completed <= L or np.any((u_levels < 0) | (u_levels >= completed)):
+    completed = int(data["completed"]) if "completed" in data else n_grid
+    if (
+        not 0 <= completed <= n_grid
+        or np.any((u_levels < 0) | (u_levels >= L))
+        or np.any(levels[u_levels] >= completed)
+    ):
         raise ValueError(
             f"saved result: inconsistent 'completed' = {completed} "
             f"(levels {L}, stored displacement levels {u_levels.tolist()[:5]})"
@@ -473,4 +518,5 @@ def result_from_arrays(
         u_levels=u_levels.copy(),
         completed=completed,
         solver=dict(solver or {}),
+        levels=levels.copy(),
     )

@@ -140,8 +140,18 @@ class Result:
         return self.completed < len(self.t)
 
     def level(self, t: float) -> int:
-        """Index of the level at time t."""
-        return int(self.problem.time.index([t])[0])
+        """Index of the kept level (the row of ``wear`` ...) at time t."""
+        from .timegrid import TimeGrid
+
+        return int(TimeGrid.index(self._grid, [t])[0])
+
+    @property
+    def _grid(self) -> Any:
+        from .timegrid import TimeGrid
+
+        if len(self.t) == len(self.problem.time.t):
+            return self.problem.time
+        return TimeGrid(np.asarray(self.t))
 
     def displacement(self, level: int) -> NDArray[np.float64]:
         """(n_points, 2) displacement at a level (negative counts from the end)."""
@@ -259,7 +269,7 @@ class MemorySink:
         self.row, self.slot = plan.slots()
         self.result = Result(
             problem=problem,
-            t=np.array(problem.time.t),
+            t=np.array(problem.time.t[plan.levels]),
             points=problem.mesh.points.copy(),
             u=np.zeros((len(plan.u_levels), nv, 2)),
             contact_nodes=d.contact.nodes.copy(),
@@ -271,7 +281,7 @@ class MemorySink:
             p_soft=np.zeros((K, m)),
             iterations=np.zeros(K, dtype=np.int64),
             residuals=np.zeros((K, 3)),
-            u_levels=plan.u_levels.copy(),
+            u_levels=np.searchsorted(plan.levels, plan.u_levels).astype(np.int64),
             solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
             completed=0,
             levels=plan.levels.copy(),

@@ -125,20 +125,23 @@ _SOLUTION = ("u_nu", "p_rigid", "p_soft")
 
 def state_arrays(state: LoopState) -> dict[str, NDArray[Any]]:
     """Plain arrays of a state (for ``numpy.savez``)."""
+    m = len(state.w)
+
+    def rows(values: list[Any]) -> NDArray[np.float64]:
+        return np.array(values, dtype=np.float64).reshape(len(values), m)
+
     out: dict[str, NDArray[Any]] = {
         "completed": np.array(state.completed, dtype=np.int64),
         "w": np.asarray(state.w),
         "has_guess": np.array(state.guess is not None),
         "pending_levels": np.array([p.level for p in state.pending], dtype=np.int64),
-        "pending_w": np.array([p.w for p in state.pending]).reshape(len(state.pending), -1),
+        "pending_w": rows([p.w for p in state.pending]),
         "pending_iterations": np.array(
             [p.solution.iterations for p in state.pending], dtype=np.int64
         ),
     }
     for name in _SOLUTION:
-        out[f"pending_{name}"] = np.array(
-            [getattr(p.solution, name) for p in state.pending]
-        ).reshape(len(state.pending), -1)
+        out[f"pending_{name}"] = rows([getattr(p.solution, name) for p in state.pending])
     g = state.guess
     if g is not None:
         for name in _SOLUTION:

@@ -1,0 +1,225 @@
+"""``result.h5``: the levels of a run streamed to disk as they are finished.
+
+:class:`H5Sink` is the :class:`~vemwear.simulate.stream.LevelSink` of runs of the
+command line. It creates ``result.h5`` with every dataset at its final size, allocated
+and zero-filled at once (HDF5's early allocation), and afterwards only writes data into
+them: no dataset grows and no metadata changes while the run goes on. So the file is
+never structurally half-written, and after :meth:`H5Sink.checkpoint` (HDF5 flush plus
+``fsync``) the levels handed over so far survive a killed process or a lost machine.
+Contact rows are buffered in blocks of about 1 MB before they are written, so a level
+costs no HDF5 call of its own.
+
+The datasets have the names and meanings of the arrays of ``result.npz``
+(:mod:`vemwear.post.results`): the mesh and contact-node arrays, ``t`` (all L levels),
+``levels`` (K) the levels whose rows ``wear``, ``u_nu``, ``penetration``, ``lam``, ``p``,
+``iterations``, ``residuals`` hold, and ``u`` (S, n, 2) at ``u_levels``. ``completed``
+counts the finished levels once the file is closed after the run; while a run goes on
+(or after it was killed) the checkpoint next to the file says how many are final.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .results import result_from_arrays, static_arrays
+
+if TYPE_CHECKING:
+    from ..simulate import Problem, Result
+    from ..simulate.stream import LoopState, StoragePlan
+    from ..solvers import StepSolution
+
+__all__ = ["ROW_ARRAYS", "STREAM_NAME", "H5Sink", "read_stream", "result_from_stream"]
+
+#: File name of the streamed result in an output directory.
+STREAM_NAME = "result.h5"
+#: Arrays with one row per kept level, and the shape of a row (m: contact nodes).
+ROW_ARRAYS = ("wear", "u_nu", "penetration", "lam", "p", "iterations", "residuals")
+_BUFFER_BYTES = 1 << 20
+
+
+def _h5py() -> Any:
+    import h5py
+
+    return h5py
+
+
+def _early(h5py: Any) -> Any:
+    """Dataset creation properties: all storage allocated and zero-filled at creation."""
+    dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
+    dcpl.set_alloc_time(h5py.h5d.ALLOC_TIME_EARLY)
+    return dcpl
+
+
+class H5Sink:
+    """Stream a run's levels into ``result.h5``.
+
+    Parameters
+    ----------
+    path : path
+        The file.
+    problem : Problem
+        The problem being solved.
+    plan : StoragePlan
+        Which levels are kept.
+    resume : bool
+        Open an existing file (written by an earlier run of the same problem and plan)
+        and go on writing into it.
+    on_checkpoint : callable, optional
+        Called with the :class:`~vemwear.simulate.stream.LoopState` once the levels so
+        far are durable (the runner writes its checkpoint file there).
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        problem: Problem,
+        plan: StoragePlan,
+        *,
+        resume: bool = False,
+        on_checkpoint: Callable[[LoopState], None] | None = None,
+    ) -> None:
+        h5py = _h5py()
+        self.path = Path(path)
+        self.plan = plan
+        self.row, self.slot = plan.slots()
+        self.on_checkpoint = on_checkpoint
+        m = len(problem.contact.nodes)
+        K, S, nv = len(plan.levels), len(plan.u_levels), problem.mesh.n_points
+        shapes: dict[str, tuple[tuple[int, ...], Any]] = {
+            "wear": ((K, m), np.float64),
+            "u_nu": ((K, m), np.float64),
+            "penetration": ((K, m), np.float64),
+            "lam": ((K, m), np.float64),
+            "p": ((K, m), np.float64),
+            "iterations": ((K,), np.int64),
+            "residuals": ((K, 3), np.float64),
+        }
+        if resume:
+            self.file = h5py.File(self.path, "r+")
+            for name, (shape, _) in (*shapes.items(), ("u", ((S, nv, 2), None))):
+                if name not in self.file or self.file[name].shape != shape:
+                    self.file.close()
+                    raise ValueError(f"{self.path}: dataset {name!r} missing or of another shape")
+        else:
+            self.file = h5py.File(self.path, "w")
+            for name, value in static_arrays(problem, plan).items():
+                if value.dtype.kind == "U":  # HDF5 strings are bytes (UTF-8)
+                    value = np.char.encode(value, "utf-8")
+                self.file.create_dataset(name, data=value)
+            rows = max(1, min(K, _BUFFER_BYTES // (8 * max(m, 1))))
+            for name, (shape, dtype) in shapes.items():
+                chunks = (rows, *shape[1:])
+                self.file.create_dataset(
+                    name, shape=shape, dtype=dtype, chunks=chunks, dcpl=_early(h5py)
+                )
+            self.file.create_dataset(
+                "u",
+                shape=(S, nv, 2),
+                dtype=np.float64,
+                chunks=(1, nv, 2) if S else None,
+                dcpl=_early(h5py),
+            )
+            self.file.create_dataset("completed", data=np.int64(0))
+            self.file.flush()
+        self.rows_per_block = max(1, min(K, _BUFFER_BYTES // (8 * 5 * max(m, 1))))
+        self.buf = {
+            name: np.zeros((self.rows_per_block, *shape[1:]), dtype)
+            for name, (shape, dtype) in shapes.items()
+        }
+        self.buf_start = -1  # first row held in the buffer
+        self.buf_len = 0
+
+    # ------------------------------------------------------------------ LevelSink
+    def level(self, n: int, w: NDArray[np.float64], solution: StepSolution) -> None:
+        """Buffer the contact row of level ``n`` (if kept)."""
+        r = int(self.row[n])
+        if r < 0:
+            return
+        if self.buf_len and (
+            r != self.buf_start + self.buf_len or self.buf_len == self.rows_per_block
+        ):
+            self._write_buffer()
+        if not self.buf_len:
+            self.buf_start = r
+        i = self.buf_len
+        b = self.buf
+        b["wear"][i], b["u_nu"][i] = w, solution.u_nu
+        b["penetration"][i] = solution.u_nu - w
+        b["lam"][i], b["p"][i] = solution.p_rigid, solution.p_soft
+        b["iterations"][i] = solution.iterations
+        res = solution.residuals
+        b["residuals"][i] = (res["equilibrium"], res["feasibility"], res["complementarity"])
+        self.buf_len += 1
+
+    def displacement(
+        self, n: int, u: NDArray[np.float64], residuals: NDArray[np.float64] | None
+    ) -> None:
+        """Write the displacement of level ``n`` (and its residuals, if given)."""
+        self.file["u"][int(self.slot[n])] = u
+        r = int(self.row[n])
+        if residuals is None or r < 0:
+            return
+        if self.buf_len and self.buf_start <= r < self.buf_start + self.buf_len:
+            self.buf["residuals"][r - self.buf_start] = residuals
+        else:
+            self.file["residuals"][r] = residuals
+
+    def checkpoint(self, state: LoopState) -> None:
+        """Write the buffer, flush the file to the disk, then call ``on_checkpoint``."""
+        self.sync()
+        if self.on_checkpoint is not None:
+            self.on_checkpoint(state)
+
+    # ------------------------------------------------------------------ file
+    def _write_buffer(self) -> None:
+        if not self.buf_len:
+            return
+        a, k = self.buf_start, self.buf_len
+        for name, buf in self.buf.items():
+            self.file[name][a : a + k] = buf[:k]
+        self.buf_len = 0
+
+    def sync(self) -> None:
+        """Every level handed over so far, on the disk (HDF5 flush and ``fsync``)."""
+        self._write_buffer()
+        self.file.flush()
+        fd = os.open(self.path, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+    def close(self, completed: int | None = None) -> None:
+        """Write what is buffered, record ``completed`` (if given) and close the file."""
+        if not self.file.id.valid:
+            return
+        try:
+            self._write_buffer()
+            if completed is not None:
+                self.file["completed"][()] = np.int64(completed)
+        finally:
+            self.file.close()
+
+
+def read_stream(
+    path: str | os.PathLike[str], names: tuple[str, ...] | None = None
+) -> dict[str, NDArray[Any]]:
+    """Read the datasets of a ``result.h5`` (all, or ``names``) into memory."""
+    h5py = _h5py()
+    with h5py.File(path, "r") as f:
+        keys = names if names is not None else tuple(f.keys())
+        out = {k: np.asarray(f[k][()]) for k in keys}
+    return {k: np.char.decode(v, "utf-8") if v.dtype.kind == "S" else v for k, v in out.items()}
+
+
+def result_from_stream(
+    problem: Problem, path: str | os.PathLike[str], *, solver: dict[str, Any] | None = None
+) -> Result:
+    """The :class:`~vemwear.simulate.Result` held by a closed ``result.h5``, in memory."""
+    return result_from_arrays(problem, read_stream(path), solver=solver)
