@@ -117,10 +117,14 @@ def test_run_writes_everything(
         "displacement.png",
         "deformed.png",
         "time_history.png",
-        "solution.pvd",
-        "solution",
+        "solution.xdmf",
+        "solution.h5",
+        "result.h5",
+        ".vemwear",
     } <= names
-    assert len(list((out / "solution").glob("*.vtu"))) == 9
+    assert "checkpoint.npz" not in names and "PARTIAL.txt" not in names
+    # by default the displacement is stored at the levels of [output] times and T
+    assert (out / "solution.xdmf").read_text().count("<Time ") == 4
     summary = json.loads((out / "summary.json").read_text())
     extra = summary["inputs"]["extra"]
     assert extra["config"]["contact"]["mu"] == 0.2
@@ -133,25 +137,38 @@ def test_run_writes_everything(
     assert leftovers(tmp_path) == []
 
 
-def test_run_refuses_existing_outdir_and_force_replaces(
+def test_output_directory_is_never_a_trap(
     small: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    out = tmp_path / "out"
-    out.mkdir()
-    (out / "old.txt").write_text("keep me")
+    """--force replaces only what vemwear wrote; a user's directory is never touched; an
+    existing empty directory is written into as it is (same inode: never renamed)."""
     small.write_text(
         SMALL.replace("figures = true", "figures = false").replace("vtk = true", "vtk = false")
     )
+    mine = tmp_path / "myproject"
+    mine.mkdir()
+    (mine / "thesis.tex").write_text("keep me")
+    for extra in ([], ["--force"]):
+        assert main(["run", str(small), "-o", str(mine), "--no-progress", *extra]) == 2
+        err = capsys.readouterr().err
+        assert "is not empty and was not written by vemwear" in err and err.count("\n") == 1
+        assert [p.name for p in mine.iterdir()] == ["thesis.tex"]
+        assert (mine / "thesis.tex").read_text() == "keep me"
+
+    out = tmp_path / "out"
+    assert main(["run", str(small), "-o", str(out), "--no-progress"]) == 0
     assert main(["run", str(small), "-o", str(out), "--no-progress"]) == 2
-    err = capsys.readouterr().err
-    assert "exists and is not empty; use --force" in err
-    assert (out / "old.txt").read_text() == "keep me"
+    assert "holds the output of an earlier vemwear run; use --force" in capsys.readouterr().err
+    (out / "notes.txt").write_text("mine")  # a user's file put into vemwear's directory
     assert main(["run", str(small), "-o", str(out), "--no-progress", "--force"]) == 0
-    assert not (out / "old.txt").exists() and (out / "result.npz").exists()
+    assert (out / "notes.txt").read_text() == "mine" and (out / "result.npz").exists()
     assert leftovers(tmp_path) == []
+
     empty = tmp_path / "empty"
     empty.mkdir()
+    inode = empty.stat().st_ino
     assert main(["run", str(small), "-o", str(empty), "--no-progress"]) == 0
+    assert empty.stat().st_ino == inode and (empty / "result.npz").exists()
 
 
 @pytest.mark.parametrize("method", ["newton-full", "uzawa"])
@@ -166,16 +183,10 @@ def test_non_convergence_is_exit_3_and_leaves_nothing(
     assert err.count("\n") == 1
     assert not out.exists()
     assert leftovers(tmp_path) == []
-
-
-def test_non_convergence_with_force_keeps_old_output(small: Path, tmp_path: Path) -> None:
-    out = tmp_path / "out"
-    out.mkdir()
-    (out / "old.txt").write_text("old")
-    small.write_text(SMALL.replace('method = "newton"', 'method = "newton-full"\nmax_iter = 1'))
-    assert main(["run", str(small), "-o", str(out), "--no-progress", "--force"]) == 3
-    assert [p.name for p in out.iterdir()] == ["old.txt"]
-    assert leftovers(tmp_path) == []
+    empty = tmp_path / "empty"  # an existing empty directory stays, empty
+    empty.mkdir()
+    assert main(["run", str(small), "-o", str(empty), "--no-progress"]) == 3
+    assert list(empty.iterdir()) == []
 
 
 def test_solver_override(small: Path, tmp_path: Path) -> None:
@@ -195,7 +206,7 @@ def test_interrupt_is_130_and_internal_error_is_1(
     monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    sim = importlib.import_module("vemwear.simulate")  # the subpackage, not the function
+    levels = importlib.import_module("vemwear.simulate.levels")
 
     def interrupted(*args: object, **kwargs: object) -> None:
         raise KeyboardInterrupt
@@ -204,11 +215,11 @@ def test_interrupt_is_130_and_internal_error_is_1(
         raise RuntimeError("boom")
 
     out = tmp_path / "out"
-    monkeypatch.setattr(sim, "simulate", interrupted)
+    monkeypatch.setattr(levels, "run_levels", interrupted)
     assert main(["run", str(small), "-o", str(out), "--no-progress"]) == 130
     assert capsys.readouterr().err == "vemwear: interrupted\n"
     assert not out.exists() and leftovers(tmp_path) == []
-    monkeypatch.setattr(sim, "simulate", broken)
+    monkeypatch.setattr(levels, "run_levels", broken)
     assert main(["run", str(small), "-o", str(out), "--no-progress"]) == 1
     err = capsys.readouterr().err
     assert err.startswith("vemwear: error: internal error: RuntimeError: boom")
@@ -239,15 +250,16 @@ def test_atomic_output_dir(tmp_path: Path) -> None:
         assert tmp.parent == out.parent and not out.exists()
         (tmp / "x").write_text("1")
     assert (out / "x").read_text() == "1"
-    with pytest.raises(OutputDirError, match="not empty"), atomic_output_dir(out):
+    with pytest.raises(OutputDirError, match="use --force"), atomic_output_dir(out):
         pass  # pragma: no cover
     with pytest.raises(ValueError, match="inside"), atomic_output_dir(out, force=True) as tmp:
         (tmp / "y").write_text("2")
         raise ValueError("inside")
-    assert [p.name for p in out.iterdir()] == ["x"]
+    assert sorted(p.name for p in out.iterdir()) == [".vemwear", "x"]
+    (out / "mine.txt").write_text("a user's file")
     with atomic_output_dir(out, force=True) as tmp:
         (tmp / "y").write_text("2")
-    assert [p.name for p in out.iterdir()] == ["y"]
+    assert sorted(p.name for p in out.iterdir()) == [".vemwear", "mine.txt", "y"]
     assert leftovers(out.parent) == []
     (tmp_path / "file").write_text("")
     with pytest.raises(OutputDirError, match="not a directory"):

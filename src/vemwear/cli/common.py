@@ -38,12 +38,16 @@ exit codes:
   1    unexpected internal error (rerun with --debug for a traceback)
   2    invalid input: configuration file, mesh, data, output directory or arguments
        (also a refused --resume)
-  3    a solver did not converge (no output directory is left behind)
-  130  interrupted (Ctrl-C, SIGTERM or SIGHUP; no output directory is left behind)
+  3    a solver did not converge
+  130  interrupted (Ctrl-C, SIGTERM or SIGHUP)
 
-If `run` stops after finishing some time levels (codes 1, 3, 130), they are saved
-in OUTDIR.partial/ (see its PARTIAL.txt); `vemwear run CONFIG -o OUTDIR --resume`
-continues from there and gives the same result as an uninterrupted run.
+`run` streams the finished time levels into OUTDIR/result.h5 and makes them durable
+with a checkpoint every [output] checkpoint seconds and whenever it stops (codes 1, 3,
+130; see OUTDIR/PARTIAL.txt). Even after a kill -9 or a power loss,
+`vemwear run CONFIG -o OUTDIR --resume` continues from the last checkpoint and gives
+the same result as an uninterrupted run. --force replaces only an output directory
+that vemwear wrote (it holds a .vemwear marker); `vemwear clean OUTDIR` removes what
+killed runs left behind.
 
 The configuration file format is documented in docs/config.md.
 """

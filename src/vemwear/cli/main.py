@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
-from . import mesh_cmd
+from . import mesh_cmd, outdir_cmd
 from .common import (
     EXIT_CONVERGENCE,
     EXIT_INPUT,
@@ -72,12 +72,13 @@ def _common(p: argparse.ArgumentParser, *, solve: bool, outdir_required: bool = 
             "--outdir",
             required=outdir_required,
             metavar="OUTDIR",
-            help="output directory (written atomically: it appears only when the run is complete)",
+            help="output directory: new, empty, or one vemwear wrote (with --force)",
         )
         p.add_argument(
             "--force",
             action="store_true",
-            help="replace an existing non-empty OUTDIR (only after the new run has completed)",
+            help="replace the output of an earlier vemwear run in OUTDIR (only the files "
+            "vemwear wrote there; a directory vemwear did not write is never replaced)",
         )
         p.add_argument(
             "--solver",
@@ -96,18 +97,28 @@ def _common(p: argparse.ArgumentParser, *, solve: bool, outdir_required: bool = 
 def _setup_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("config", metavar="CONFIG.toml", help="configuration file (docs/config.md)")
     _common(p, solve=True)
+    _force_size(p)
     p.add_argument(
         "--resume",
         action="store_true",
-        help="continue a stopped run from the finished levels in OUTDIR.partial "
-        "(refused if the physics or the discretization changed; the solver options may "
-        "change); OUTDIR.partial is removed on success",
+        help="continue a stopped or killed run from its last checkpoint in OUTDIR "
+        "(refused if the physics, the discretization or the kept levels changed; the "
+        "solver options may change); the result is the one of an uninterrupted run",
     )
     p.set_defaults(func=cmd_run)
 
 
+def _force_size(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--force-size",
+        action="store_true",
+        help="run even if the estimated memory or disk exceeds what is available",
+    )
+
+
 def _setup_check(p: argparse.ArgumentParser) -> None:
     p.add_argument("config", metavar="CONFIG.toml", help="configuration file (docs/config.md)")
+    _force_size(p)
     _common(p, solve=False)
     p.set_defaults(func=cmd_check)
 
@@ -238,6 +249,8 @@ COMMANDS: dict[str, tuple[str, str | None, Setup]] = {
         _setup_manufactured,
     ),
     "mesh": (mesh_cmd.SUMMARY, None, mesh_cmd.setup),
+    "clean": (outdir_cmd.CLEAN_SUMMARY, None, outdir_cmd.setup_clean),
+    "export": (outdir_cmd.EXPORT_SUMMARY, None, outdir_cmd.setup_export),
 }
 
 
@@ -310,39 +323,46 @@ def _solver_options(base: SolverOptions, method: str | None) -> SolverOptions:
 def cmd_run(args: argparse.Namespace) -> int:
     """``vemwear run CONFIG -o OUTDIR [--resume]``: validate, solve, write, summarize."""
     from ..config import load_config
-    from ..runner import (
-        check_output_dir,
-        execute_run,
-        prepare_run,
-        result_rows,
-        smallness_report,
-    )
+    from ..runner import execute_run, prepare_run, result_rows, smallness_report
+    from ..runner.outdir import stale_temporaries
+    from ..runner.plan import admit_sizes, estimate_config
 
     t0 = time.perf_counter()
-    cfg = load_config(args.config)
-    out = check_output_dir(args.outdir, args.force, protect=[args.config])  # before solving
+    admit = admit_sizes(args.outdir, force_size=args.force_size)
+    cfg = load_config(args.config, admit=admit)
     solver = _solver_options(cfg.solver, args.solver)
-    plan = prepare_run(
+    stale = [] if args.force else stale_temporaries(args.outdir)
+    if stale:
+        say(
+            f"{PROG}: warning: {len(stale)} temporary file(s) of killed runs in or next to "
+            f"{args.outdir} (e.g. {stale[0].name}); remove them with: vemwear clean {args.outdir}"
+        )
+    est = estimate_config(cfg)
+    plan = prepare_run(  # the output directory and the checkpoint, before solving
         cfg,
         args.config,
-        out,
+        args.outdir,
         solver,
         force=args.force,
         resume=args.resume,
         solver_flag=args.solver,
+        need_bytes=0 if args.force_size else int(est.disk),
     )
     _, warning = smallness_report(cfg.problem)
-    if warning:
-        say(f"{PROG}: warning: {warning}")
+    for w in [warning, *_overshoot(cfg)]:
+        if w:
+            say(f"{PROG}: warning: {w}")
+    if not args.no_progress:
+        say(f"{PROG}: {cfg.title}: " + ", ".join(f"{k} {v}" for k, v in est.rows()))
     result = execute_run(plan, progress=not args.no_progress)
     rows = [
         *result_rows(result),
         ("time", f"{time.perf_counter() - t0:.2f} s"),
-        ("output", str(out)),
+        ("output", str(plan.out)),
     ]
     text = f"{PROG}: {cfg.title}: done\n" + rows_text(rows)
-    if plan.previous is not None:
-        text += f"\n  resumed from level {plan.previous.completed} ({plan.part} removed)"
+    if plan.state is not None:
+        text += f"\n  resumed from level {plan.state.completed}"
     print(text)
     return EXIT_OK
 
@@ -351,15 +371,26 @@ def cmd_check(args: argparse.Namespace) -> int:
     """``vemwear check CONFIG``: validate and describe the problem, no solve."""
     from ..config import load_config
     from ..runner import check_rows, smallness_report
+    from ..runner.plan import admit_sizes, estimate_config
 
-    cfg = load_config(args.config)
+    cfg = load_config(args.config, admit=admit_sizes(force_size=args.force_size))
     rows = check_rows(cfg)
     row, warning = smallness_report(cfg.problem)
     rows.append(("smallness (Thm 3.4)", row))
+    rows += estimate_config(cfg).rows()
     print(f"{PROG}: {args.config}: {cfg.title}: valid\n" + rows_text(rows))
-    if warning:
-        say(f"{PROG}: warning: {warning}")
+    for w in [warning, *_overshoot(cfg)]:
+        if w:
+            say(f"{PROG}: warning: {w}")
     return EXIT_OK
+
+
+def _overshoot(cfg: Any) -> list[str]:
+    """The warning of the explicit wear rule's overshoot, if any."""
+    from ..simulate.explicit import overshoot_warning
+
+    w = overshoot_warning(cfg.problem)
+    return [w] if w else []
 
 
 def cmd_schema(args: argparse.Namespace) -> int:
@@ -514,6 +545,7 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
         for m, n in (
             ("vemwear.config.errors", "ConfigError"),
             ("vemwear.runner.outdir", "OutputDirError"),
+            ("vemwear.runner.plan", "PlanError"),
             ("vemwear.mesh.polymesh", "MeshError"),
         )
     ):

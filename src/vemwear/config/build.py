@@ -13,7 +13,7 @@ from __future__ import annotations
 import copy
 import os
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -31,16 +31,24 @@ from . import schema as s
 from .errors import ConfigError, at, from_library, from_validation
 from .expr import Expression
 
-__all__ = ["Config", "OutputOptions", "load_config", "parse_config"]
+__all__ = ["Config", "OutputOptions", "Sizes", "load_config", "parse_config"]
 
 
 @dataclass(frozen=True)
 class OutputOptions:
-    """The ``[output]`` section with its ``times`` resolved to levels of the time grid."""
+    """The ``[output]`` section with its times resolved to levels of the time grid.
+
+    ``u_levels`` are the indices of the levels whose displacement is stored
+    (``[output] store_u``; by default the levels of ``times`` and the final one).
+    """
 
     times: tuple[float, ...] = ()
     figures: bool = True
     vtk: bool = True
+    paraview: str = "xdmf"
+    u_levels: tuple[int, ...] | NDArray[np.int64] = ()
+    every: int = 1
+    checkpoint: float = 60.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,6 +80,62 @@ class Config:
     output: OutputOptions
     mesh_source: dict[str, Any] = field(default_factory=dict)
     model: s.ConfigFile | None = None
+
+
+@dataclass(frozen=True)
+class Sizes:
+    """The sizes of a run, known from the configuration before anything is built.
+
+    Attributes
+    ----------
+    source : str
+        The configuration file (the prefix of messages).
+    levels : int
+        Time levels L.
+    cells : int
+        About how many cells the mesh has.
+    kept, stored_u : int
+        Kept contact rows and stored displacements.
+    paraview : bool
+        Whether a ParaView series is written.
+    """
+
+    source: str
+    levels: int
+    cells: int
+    kept: int
+    stored_u: int
+    paraview: bool
+
+
+def _sizes(src: str, c: s.ConfigFile, base_dir: Path) -> Sizes:
+    t = c.time
+    if isinstance(t, s.Steps):
+        L = t.steps + 1
+    elif isinstance(t, s.Pattern):
+        L = int(np.ceil(t.T / max(sum(t.pattern), 1e-300))) * len(t.pattern) + 1
+    elif isinstance(t, s.Levels):
+        L = len(t.levels)
+    else:
+        L = len(t.dt) + 1
+    m = c.mesh
+    if isinstance(m, s.MeshFile):
+        path = Path(m.file).expanduser()
+        path = path if path.is_absolute() else base_dir / path
+        cells = path.stat().st_size // 64 if path.is_file() else 0
+    else:
+        cells = family(m.generator).estimate_cells(m.model_dump(exclude_unset=True))
+    store, out = c.output.store_u, c.output
+    if store is None:
+        stored = len(out.times or (1, 2, 3, 4)) + 1
+    elif isinstance(store, str):
+        stored = L if store == "all" else 1
+    elif isinstance(store, int):
+        stored = L // store + 1
+    else:
+        stored = len(store) + 1
+    kept = min(L, L // out.every + 1 + stored)
+    return Sizes(src, L, int(cells), kept, min(stored, L), out.vtk)
 
 
 # ---------------------------------------------------------------------------- expressions
@@ -190,6 +254,29 @@ def _output_times(src: str, times: list[float] | None, grid: TimeGrid) -> tuple[
     return tuple(times)
 
 
+def _u_levels(
+    src: str, store: str | int | list[float] | None, times: tuple[float, ...], grid: TimeGrid
+) -> NDArray[np.int64]:
+    """``[output] store_u`` as sorted level indices (the final level always included)."""
+    L = len(grid.t)
+    if store is None:
+        return np.union1d(grid.index(list(times)) if times else [], [L - 1]).astype(np.int64)
+    if isinstance(store, str):
+        return np.arange(L, dtype=np.int64) if store == "all" else np.array([L - 1], np.int64)
+    if isinstance(store, int):
+        return np.union1d(np.arange(0, L, store), [L - 1]).astype(np.int64)
+    for i, t in enumerate(store):
+        try:
+            grid.index([t])
+        except ValueError:
+            near = float(grid.t[int(np.abs(grid.t - t).argmin())])
+            raise ConfigError(
+                f"{src}: [output] store_u[{i}] = {t:g} is not a time level of the grid (T = "
+                f"{grid.T:g}, {grid.n_steps} steps; nearest level {near:.12g})"
+            ) from None
+    return np.union1d(grid.index(store) if store else [], [L - 1]).astype(np.int64)
+
+
 def _check_loads(src: str, pr: Problem) -> None:
     """Loads given by expressions give finite load vectors at every time level."""
     for name, assemble in (("f1", body_force_vector), ("f2", traction_vector)):
@@ -210,13 +297,18 @@ def _check_loads(src: str, pr: Problem) -> None:
 
 
 # ---------------------------------------------------------------------------- entry points
-def load_config(path: str | os.PathLike[str]) -> Config:
+def load_config(
+    path: str | os.PathLike[str], *, admit: Callable[[Sizes], None] | None = None
+) -> Config:
     """Read and validate a TOML configuration file.
 
     Parameters
     ----------
     path : str or Path
         The ``.toml`` file; relative mesh file names refer to its directory.
+    admit : callable, optional
+        Called with the :class:`Sizes` of the run once the file is valid and before the
+        mesh and the time grid are built; it may refuse the run by raising.
 
     Returns
     -------
@@ -237,7 +329,9 @@ def load_config(path: str | os.PathLike[str]) -> Config:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from exc
     except OSError as exc:
         raise ConfigError(f"{path}: cannot read: {exc}") from exc
-    return parse_config(data, source=str(path), base_dir=path.resolve().parent, path=path)
+    return parse_config(
+        data, source=str(path), base_dir=path.resolve().parent, path=path, admit=admit
+    )
 
 
 def parse_config(
@@ -245,6 +339,7 @@ def parse_config(
     source: str = "config",
     base_dir: str | Path = ".",
     path: Path | None = None,
+    admit: Callable[[Sizes], None] | None = None,
 ) -> Config:
     """Validate configuration data (a dict as read by :func:`tomllib.load`).
 
@@ -258,6 +353,8 @@ def parse_config(
         Directory that relative mesh file names refer to.
     path : Path, optional
         The file, recorded in the returned :class:`Config`.
+    admit : callable, optional
+        As for :func:`load_config`.
 
     Returns
     -------
@@ -275,6 +372,8 @@ def parse_config(
         c = s.ConfigFile.model_validate(data)
     except ValidationError as exc:
         raise from_validation(exc, src) from None
+    if admit is not None:
+        admit(_sizes(src, c, Path(base_dir)))
     raw: dict[str, Any] = copy.deepcopy(dict(data))  # valid, so plain TOML types only
     con = raw["contact"]
     with at(src, "[material]"):
@@ -287,7 +386,16 @@ def parse_config(
             else TableCompliance(tuple(law.r), tuple(law.p))
         )
     grid = _time(src, c.time, raw["time"])
-    output = OutputOptions(_output_times(src, c.output.times, grid), c.output.figures, c.output.vtk)
+    times = _output_times(src, c.output.times, grid)
+    output = OutputOptions(
+        times,
+        c.output.figures,
+        c.output.vtk,
+        c.output.paraview,
+        _u_levels(src, c.output.store_u, times, grid),
+        c.output.every,
+        c.output.checkpoint,
+    )
     sol = c.solver
     with at(src, "[solver]", raw.get("solver", {})):
         solver = SolverOptions(sol.method, sol.tol, sol.max_iter, sol.backend)

@@ -334,6 +334,14 @@ class Solver(Section):
     )
 
 
+StoreU: TypeAlias = by_kind(  # type: ignore[valid-type]
+    "'all', 'final', an array of times or an integer N >= 1",
+    string=Literal["all", "final"],
+    array=list[float],
+    number=Annotated[int, Field(ge=1)],
+)
+
+
 class Output(Section):
     """What ``vemwear run`` writes besides ``result.npz`` and ``summary.json``."""
 
@@ -343,7 +351,26 @@ class Output(Section):
         "(default: the levels nearest T/4, T/2, 3T/4, T)",
     )
     figures: bool = Field(True, description="write the PNG figures")
-    vtk: bool = Field(True, description="write the ParaView series solution.pvd")
+    vtk: bool = Field(True, description="write the ParaView time series")
+    paraview: Literal["xdmf", "pvd"] = Field(
+        "xdmf",
+        description="format of the ParaView series: 'xdmf' (solution.xdmf + solution.h5, one "
+        "file pair) or 'pvd' (solution.pvd + one .vtu per stored level)",
+    )
+    store_u: StoreU | None = Field(
+        None,
+        description="levels whose displacement is stored: 'all', 'final', a list of times "
+        "(time levels) or N (every N-th level and the final one); default: the levels of "
+        "`times` and the final one",
+    )
+    every: int = Field(
+        1, ge=1, description="keep the contact arrays of every N-th level (and the final one)"
+    )
+    checkpoint: float = Field(
+        60.0,
+        ge=0,
+        description="seconds between durable checkpoints of a run (0: only when stopped)",
+    )
 
 
 # ---------------------------------------------------------------------------- boundary

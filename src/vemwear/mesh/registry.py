@@ -83,6 +83,17 @@ class Family:
     aliases: tuple[str, ...] = ()
     cells_per_division: int = 0
 
+    def estimate_cells(self, options: Mapping[str, Any]) -> int:
+        """About how many cells :meth:`generate` makes with ``options``, without making
+        them (for planning a run)."""
+        merged = {o.name: o.default for o in self.options} | dict(options)
+        if merged.get("seeds") is not None:
+            return len(merged["seeds"])
+        if merged.get("n_cells") is not None:
+            return int(merged["n_cells"])
+        nx, ny = merged.get("divisions") or (1, 1)
+        return int(nx) * int(ny) * max(self.cells_per_division, 1)
+
     def option(self, name: str) -> Option | None:
         """The option called ``name``, or None."""
         return next((o for o in self.options if o.name == name), None)

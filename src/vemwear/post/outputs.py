@@ -28,13 +28,15 @@ def write_outputs(
     times: Sequence[float] = (),
     figures: bool = True,
     vtk: bool = True,
+    paraview: str = "xdmf",
     extra: dict[str, Any] | None = None,
 ) -> dict[str, list[str]]:
     """Write the standard output of one run into an existing directory.
 
     ``result.npz`` and ``summary.json`` (:func:`vemwear.post.save_result`), the figures
     (contact profiles at ``times``, displacement and deformed mesh at the final level,
-    time history; see :data:`FIGURE_NAMES`) and the VTK series (``solution.pvd`` and
+    time history; see :data:`FIGURE_NAMES`) and the ParaView series of the stored
+    displacements (``solution.xdmf`` + ``solution.h5``, or ``solution.pvd`` +
     ``solution/*.vtu``).
 
     Parameters
@@ -47,7 +49,9 @@ def write_outputs(
     times : sequence of float
         Times of the contact-profile figure (levels of the time grid); default: T.
     figures, vtk : bool
-        Whether to write the figures and the VTK series.
+        Whether to write the figures and the ParaView series.
+    paraview : {"xdmf", "pvd"}
+        Format of the ParaView series.
     extra : dict, optional
         Stored under ``inputs.extra`` in ``summary.json``.
 
@@ -71,9 +75,14 @@ def write_outputs(
         post.plot_deformed(result, last, out / FIGURE_NAMES["deformed"])
         post.plot_time_history(result, out / FIGURE_NAMES["time_history"])
         written["figures"] += list(FIGURE_NAMES.values())
-    if vtk:
+    if vtk and paraview == "xdmf":
+        from .xdmf import write_xdmf_series
+
+        xdmf = write_xdmf_series(result, out)
+        written["vtk"] += [xdmf.name, xdmf.with_suffix(".h5").name]
+    elif vtk:
         pvd = post.write_vtk_series(result, out)
-        written["vtk"].append(os.path.relpath(pvd, out))
+        written["vtk"] += [os.path.relpath(pvd, out), pvd.stem]
     return written
 
 

@@ -34,7 +34,15 @@ if TYPE_CHECKING:
     from ..simulate.stream import LoopState, StoragePlan
     from ..solvers import StepSolution
 
-__all__ = ["ROW_ARRAYS", "STREAM_NAME", "H5Sink", "read_stream", "result_from_stream"]
+__all__ = [
+    "ROW_ARRAYS",
+    "STREAM_NAME",
+    "H5Sink",
+    "export_npz",
+    "read_stream",
+    "result_from_stream",
+    "stream_bytes",
+]
 
 #: File name of the streamed result in an output directory.
 STREAM_NAME = "result.h5"
@@ -223,3 +231,43 @@ def result_from_stream(
 ) -> Result:
     """The :class:`~vemwear.simulate.Result` held by a closed ``result.h5``, in memory."""
     return result_from_arrays(problem, read_stream(path), solver=solver)
+
+
+def stream_bytes(path: str | os.PathLike[str]) -> int:
+    """Bytes the datasets of a ``result.h5`` take in memory."""
+    h5py = _h5py()
+    with h5py.File(path, "r") as f:
+        return int(sum(f[k].size * f[k].dtype.itemsize for k in f))
+
+
+def export_npz(outdir: str | os.PathLike[str], *, force: bool = False) -> Path:
+    """Write ``OUTDIR/result.npz`` from ``OUTDIR/result.h5`` (same array names).
+
+    Raises
+    ------
+    ValueError
+        If there is no ``result.h5``, the run is not complete, ``result.npz`` exists and
+        not ``force``, or the arrays do not fit in the available memory.
+    """
+    from ..util.atomic import atomic_file
+    from ..util.system import available_memory
+    from .results import NPZ_NAME
+
+    out = Path(outdir)
+    src, target = out / STREAM_NAME, out / NPZ_NAME
+    if not src.is_file():
+        raise ValueError(f"{out}: no streamed result {STREAM_NAME} to export")
+    if target.exists() and not force:
+        raise ValueError(f"{target} exists; use --force to write it again")
+    need, avail = stream_bytes(src), available_memory()
+    if avail and need > avail:
+        raise ValueError(
+            f"{src}: its arrays take {need / 1e9:.2f} GB, more than the {avail / 1e9:.2f} GB "
+            "of memory available here; export it on a larger machine"
+        )
+    data = read_stream(src)
+    if int(data.get("completed", 0)) < int(data["levels"][-1]) + 1:
+        raise ValueError(f"{src} holds an unfinished run; finish it with vemwear run --resume")
+    with atomic_file(target, durable=True) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, **data)  # type: ignore[arg-type]
+    return target

@@ -24,7 +24,7 @@ import os
 import re
 from collections.abc import Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import quoteattr
 
 import meshio
@@ -40,7 +40,7 @@ from ..vem.projection import Projection
 if TYPE_CHECKING:
     from ..simulate.loop import Result
 
-__all__ = ["cell_strain_stress", "write_vtk_series"]
+__all__ = ["cell_strain_stress", "level_fields", "write_vtk_series"]
 
 
 def cell_strain_stress(
@@ -101,6 +101,37 @@ def _levels(levels: Iterable[int] | None, L: int) -> list[int]:
     return sorted(set(out))
 
 
+def level_fields(
+    result: Result, level: int, projection: Projection | None = None
+) -> tuple[dict[str, NDArray[np.float64]], dict[str, NDArray[np.float64]]]:
+    """The point data and the cell data (in cell order) of one stored level, as listed
+    in the module docstring (without ``cell_id``)."""
+    mesh = result.problem.mesh
+    n = mesh.n_points
+    nodes = np.asarray(result.contact_nodes)
+    u = np.asarray(result.displacement(level))
+    disp = np.zeros((n, 3))
+    disp[:, :2] = u
+    point_data: dict[str, NDArray[np.float64]] = {"displacement": disp}
+    for key, arr in (
+        ("wear", result.wear),
+        ("u_nu", result.u_nu),
+        ("penetration", result.penetration),
+        ("lam", result.p_rigid),
+        ("p", result.p_soft),
+    ):
+        full = np.zeros(n)
+        full[nodes] = np.asarray(arr[level])
+        point_data[key] = full
+    contact = np.zeros(n)
+    contact[nodes] = 1.0
+    point_data["contact"] = contact
+    proj = projection if projection is not None else Projection(mesh)
+    strain, stress, vm = cell_strain_stress(mesh, u, result.problem.material, proj)
+    cells = {"strain": strain.reshape(-1, 9), "stress": stress.reshape(-1, 9), "von_mises": vm}
+    return point_data, cells
+
+
 def _pvd_text(entries: list[tuple[float, str]]) -> str:
     lines = [
         '<?xml version="1.0"?>',
@@ -150,7 +181,6 @@ def write_vtk_series(
     sub = out / name
     sub.mkdir(parents=True, exist_ok=True)
     mesh = result.problem.mesh
-    material = result.problem.material
     L = len(result.t)
     # by default every level whose displacement was stored
     chosen = [int(v) for v in result.u_levels] if levels is None else _levels(levels, L)
@@ -159,35 +189,14 @@ def write_vtk_series(
     base = to_meshio(mesh, with_boundary=False)
     order = _block_order(mesh)
     cell_id = [ids.astype(np.int64) for ids in order]
-    n = mesh.n_points
-    nodes = np.asarray(result.contact_nodes)
-    contact = np.zeros(n)
-    contact[nodes] = 1.0
     entries: list[tuple[float, str]] = []
     written: set[str] = set()
     for lv in chosen:
-        u = np.asarray(result.displacement(lv))
-        disp = np.zeros((n, 3))
-        disp[:, :2] = u
-        point_data: dict[str, NDArray[np.float64]] = {"displacement": disp}
-        for key, arr in (
-            ("wear", result.wear),
-            ("u_nu", result.u_nu),
-            ("penetration", result.penetration),
-            ("lam", result.p_rigid),
-            ("p", result.p_soft),
-        ):
-            full = np.zeros(n)
-            full[nodes] = np.asarray(arr[lv])
-            point_data[key] = full
-        point_data["contact"] = contact
-        strain, stress, vm = cell_strain_stress(mesh, u, material, projection)
-        cell_data = {
-            "strain": [strain[ids].reshape(-1, 9) for ids in order],
-            "stress": [stress[ids].reshape(-1, 9) for ids in order],
-            "von_mises": [vm[ids] for ids in order],
-            "cell_id": cell_id,
+        point_data, cells = level_fields(result, lv, projection)
+        cell_data: dict[str, list[NDArray[Any]]] = {
+            k: [v[ids] for ids in order] for k, v in cells.items()
         }
+        cell_data["cell_id"] = cell_id
         m = meshio.Mesh(base.points, base.cells, point_data=point_data, cell_data=cell_data)
         fname = f"{name}_{lv:0{width}d}.vtu"
         meshio.write(sub / fname, m, file_format="vtu")

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from .describe import check_rows, result_rows, smallness_report
     from .outdir import OutputDirError, atomic_output_dir, check_output_dir
-    from .run import ResumeError, RunPlan, execute_run, partial_path, prepare_run
+    from .run import ResumeError, RunPlan, execute_run, prepare_run
     from .signals import Terminated, signals_as_interrupts
 
 _WHERE = {
@@ -36,7 +36,6 @@ _WHERE = {
     "ResumeError": "run",
     "RunPlan": "run",
     "execute_run": "run",
-    "partial_path": "run",
     "prepare_run": "run",
     "Terminated": "signals",
     "signals_as_interrupts": "signals",
@@ -50,7 +49,6 @@ __all__ = [
     "check_output_dir",
     "check_rows",
     "execute_run",
-    "partial_path",
     "prepare_run",
     "result_rows",
     "signals_as_interrupts",

@@ -23,7 +23,7 @@ from ..solvers.system import StepData, check_converged
 from .stream import LevelSink, LoopState, Pending, StoragePlan
 
 if TYPE_CHECKING:
-    from .loop import SolverOptions
+    from .options import SolverOptions
     from .problem import Problem
 
 __all__ = ["RESIDUAL_NAMES", "run_levels"]

@@ -9,54 +9,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..solvers import SOLVERS, NewtonOptions, StepSolution, UzawaOptions
+from ..solvers import StepSolution
 from .levels import RESIDUAL_NAMES, run_levels
+from .options import SolverOptions
 from .problem import Problem
 from .stream import LoopState, StoragePlan
-
-
-@dataclass(frozen=True)
-class SolverOptions:
-    """Which solver and how tightly.
-
-    Parameters
-    ----------
-    method : {"newton", "newton-full", "uzawa"}
-        ``newton``: semismooth Newton condensed on Gamma_C, one factorization of K
-        for the whole run (default). ``newton-full``: Newton on all dofs, a new
-        factorization per iteration (the plain path). ``uzawa``: the paper's
-        Uzawa iteration with two multipliers.
-    tol : float
-        Bound on the scaled KKT residuals of every step.
-    max_iter : int or None
-        Iteration limit per step (default: 100 for Newton, 200000 for Uzawa).
-    backend : {"auto", "scipy", "pardiso"}
-        Sparse direct solver.
-    """
-
-    method: str = "newton"
-    tol: float = 1e-10
-    max_iter: int | None = None
-    backend: str = "auto"
-
-    def __post_init__(self) -> None:
-        if self.method not in SOLVERS:
-            raise ValueError(
-                f"solver: unknown method {self.method!r}; expected one of {list(SOLVERS)}"
-            )
-        if not (self.tol > 0):
-            raise ValueError(f"solver: tol must be positive, got {self.tol}")
-        if self.max_iter is not None and self.max_iter < 1:
-            raise ValueError(f"solver: max_iter must be >= 1, got {self.max_iter}")
-
-    def build(self, system):
-        cls = SOLVERS[self.method]
-        kw: dict[str, Any] = {"tol": self.tol, "backend": self.backend}
-        if self.max_iter is not None:
-            kw["max_iter"] = self.max_iter
-        if self.method == "uzawa":
-            return cls(system, UzawaOptions(**kw))
-        return cls(system, NewtonOptions(**kw))
 
 
 @dataclass

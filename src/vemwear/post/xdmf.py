@@ -1,0 +1,147 @@
+"""ParaView output as one XDMF time series: ``solution.xdmf`` + ``solution.h5``.
+
+The light data (``.xdmf``, XDMF 3 XML) describes a temporal collection of grids that
+share one mesh; the heavy data (``.h5``) holds the mesh once and the fields of every
+stored level, written level by level, so a long series needs neither one file per
+level nor all levels in memory. The fields are those of the VTU series
+(:mod:`vemwear.post.vtk`): point data ``displacement`` (3 components), ``wear``,
+``u_nu``, ``penetration``, ``lam``, ``p``, ``contact``; cell data ``strain``,
+``stress`` (3x3 tensors), ``von_mises``, ``cell_id``.
+
+The cells are written as an XDMF ``Mixed`` topology: triangles (type 4) and
+quadrilaterals (type 5) as such, every other polygon as type 3 followed by its vertex
+count. meshio's XDMF writer has no general polygons, so the XML is written here; the
+heavy data goes through h5py. Both files are written under temporary names and renamed
+into place when complete, the ``.h5`` first.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..util.atomic import atomic_file
+from ..vem.projection import Projection
+from .vtk import level_fields
+
+if TYPE_CHECKING:
+    from ..mesh.polymesh import Mesh
+    from ..simulate.loop import Result
+
+__all__ = ["mixed_topology", "write_xdmf_series"]
+
+_TRIANGLE, _QUAD, _POLYGON = 4, 5, 3
+
+
+def mixed_topology(mesh: Mesh) -> NDArray[np.int64]:
+    """The cells as one XDMF ``Mixed`` topology array (in cell order)."""
+    off, verts = mesh.cell_offsets, mesh.cell_vertices
+    counts = np.diff(off)
+    head = np.where(counts == 3, 1, np.where(counts == 4, 1, 2))  # entries before the ids
+    start = np.concatenate([[0], np.cumsum(head + counts)])
+    out = np.empty(start[-1], dtype=np.int64)
+    kind = np.where(counts == 3, _TRIANGLE, np.where(counts == 4, _QUAD, _POLYGON))
+    out[start[:-1]] = kind
+    poly = head == 2
+    out[start[:-1][poly] + 1] = counts[poly]
+    # vertex ids: position of each id = start of its cell + head + its index in the cell
+    cell_of = np.repeat(np.arange(len(counts)), counts)
+    local = np.arange(len(verts)) - np.repeat(off[:-1], counts)
+    out[start[:-1][cell_of] + head[cell_of] + local] = verts
+    return out
+
+
+def _item(dims: tuple[int, ...], dtype: Any, h5name: str, path: str) -> str:
+    kind = "Int" if np.issubdtype(dtype, np.integer) else "Float"
+    d = " ".join(map(str, dims))
+    return (
+        f'<DataItem Dimensions="{d}" NumberType="{kind}" Precision="8" Format="HDF">'
+        f"{h5name}:{path}</DataItem>"
+    )
+
+
+def _attribute(name: str, center: str, value: NDArray[Any], h5name: str, path: str) -> str:
+    kind = {1: "Scalar", 3: "Vector", 9: "Tensor"}[1 if value.ndim == 1 else value.shape[1]]
+    return (
+        f'<Attribute Name={quoteattr(name)} AttributeType="{kind}" Center="{center}">'
+        f"{_item(value.shape, value.dtype, h5name, path)}</Attribute>"
+    )
+
+
+def write_xdmf_series(
+    result: Result,
+    outdir: str | os.PathLike[str],
+    levels: Iterable[int] | None = None,
+    name: str = "solution",
+) -> Path:
+    """Write the stored levels of a run as ``<name>.xdmf`` + ``<name>.h5``.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    outdir : path
+        Output directory; created if missing.
+    levels : iterable of int, optional
+        Rows of the result to write (each with a stored displacement); default: every
+        row in ``result.u_levels``.
+    name : str
+        Base name of the two files.
+
+    Returns
+    -------
+    Path
+        The ``.xdmf`` file.
+    """
+    import h5py
+
+    if not name or os.sep in name or (os.altsep and os.altsep in name):
+        raise ValueError(f"xdmf: series name must be a plain file name, got {name!r}")
+    out = Path(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    mesh = result.problem.mesh
+    chosen = [int(v) for v in (result.u_levels if levels is None else levels)]
+    h5name = f"{name}.h5"
+    topo = mixed_topology(mesh)
+    projection = Projection(mesh)
+    grids: list[str] = []
+    mesh_items = (
+        f'<Topology TopologyType="Mixed" NumberOfElements="{mesh.n_cells}">'
+        f"{_item(topo.shape, topo.dtype, h5name, '/mesh/topology')}</Topology>"
+        f'<Geometry GeometryType="XY">'
+        f"{_item(mesh.points.shape, mesh.points.dtype, h5name, '/mesh/points')}</Geometry>"
+    )
+    cell_id = np.arange(mesh.n_cells, dtype=np.int64)
+    with atomic_file(out / h5name) as tmp_h5:
+        with h5py.File(tmp_h5, "w") as f:
+            f["mesh/topology"] = topo
+            f["mesh/points"] = np.asarray(mesh.points, dtype=np.float64)
+            f["mesh/cell_id"] = cell_id
+            for j, lv in enumerate(chosen):
+                point_data, cell_data = level_fields(result, lv, projection)
+                attrs = []
+                for center, fields in (("Node", point_data), ("Cell", cell_data)):
+                    for key, value in fields.items():
+                        path = f"/levels/{j}/{key}"
+                        f[path] = np.asarray(value, dtype=np.float64)
+                        attrs.append(_attribute(key, center, f[path][()], h5name, path))
+                attrs.append(_attribute("cell_id", "Cell", cell_id, h5name, "/mesh/cell_id"))
+                grids.append(
+                    f'<Grid Name="{name}_{lv}" GridType="Uniform">'
+                    f'<Time Value="{float(result.t[lv])!r}"/>{mesh_items}{"".join(attrs)}</Grid>'
+                )
+    text = (
+        '<?xml version="1.0"?>\n<Xdmf Version="3.0">\n<Domain>\n'
+        f'<Grid Name="{name}" GridType="Collection" CollectionType="Temporal">\n'
+        + "\n".join(grids)
+        + "\n</Grid>\n</Domain>\n</Xdmf>\n"
+    )
+    with atomic_file(out / f"{name}.xdmf") as tmp_x:
+        tmp_x.write_text(text, encoding="utf-8")
+    return out / f"{name}.xdmf"

@@ -1,0 +1,160 @@
+"""Plan before work: the memory and the disk a run will need, checked before it starts.
+
+:func:`estimate` gives peak memory and disk bytes from the sizes of a run. The model:
+
+* memory: 160 MB for the interpreter and the libraries; the sparse factorization of the
+  stiffness, about ``250 N log2 N`` bytes for N unknowns (nested dissection in 2D;
+  measured with ``/usr/bin/time`` on squares from 64 x 32 to 512 x 256 cells: 167, 197,
+  439 and 826 MB peak against 160 MB + 81, 460, 2080, 8860 ... of this term, within a
+  factor 2 everywhere); 24 bytes per time level (the time grid and the level tables);
+  the dense inverse of the contact block, ``3 * 8 m^2``; and, when the run ends, the
+  kept arrays in memory for ``result.npz`` (twice: read and written);
+* disk: ``result.h5`` (the kept contact rows, ``7 * 8 m`` bytes each, and the stored
+  displacements, ``16 n`` bytes each), ``result.npz`` (as much again), and the ParaView
+  series (about ``16 n + 160 C`` bytes per stored displacement).
+
+Before the mesh and the time grid are built (:func:`vemwear.config.load_config`'s
+``admit`` hook), the sizes come from the configuration: levels from ``[time]``, cells
+from the generator's options (:meth:`vemwear.mesh.registry.Family.estimate_cells`),
+about ``2 C`` vertices and ``2 sqrt(C)`` contact nodes. So ``steps = 1e9`` is refused
+in a fraction of a second, before anything large is allocated.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..util.system import available_memory, free_disk
+
+if TYPE_CHECKING:
+    from ..config import Config
+    from ..config.build import Sizes
+
+__all__ = ["Estimate", "PlanError", "admit_sizes", "estimate", "estimate_config"]
+
+_BASE = 160e6
+_FACTOR = 250.0
+
+
+class PlanError(ValueError):
+    """A run that would not fit in the machine's memory or the output's disk."""
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Peak memory and disk of a run, in bytes."""
+
+    memory: float
+    disk: float
+
+    def rows(self) -> list[tuple[str, str]]:
+        return [("memory (estimate)", _size(self.memory)), ("disk (estimate)", _size(self.disk))]
+
+
+def _size(n: float) -> str:
+    return f"{n / 1e9:.2f} GB" if n >= 1e9 else f"{n / 1e6:.0f} MB"
+
+
+def estimate(
+    *,
+    levels: int,
+    points: int,
+    cells: int,
+    contact: int,
+    kept: int,
+    stored_u: int,
+    paraview: bool,
+    npz: bool = True,
+) -> Estimate:
+    """Peak memory and disk of a run (the model of the module docstring).
+
+    Parameters
+    ----------
+    levels : int
+        L, the time levels.
+    points, cells, contact : int
+        Mesh vertices, cells and contact nodes m.
+    kept, stored_u : int
+        Kept contact rows K and stored displacements S.
+    paraview : bool
+        Whether a ParaView series is written.
+    npz : bool
+        Whether ``result.npz`` is written (its arrays are then held in memory).
+    """
+    n = max(2 * points, 2)
+    rows = kept * (7 * 8 * contact + 32)
+    disp = stored_u * 16 * points
+    arrays = rows + disp
+    memory = (
+        _BASE
+        + _FACTOR * n * math.log2(n)
+        + 24 * levels
+        + 24 * float(contact) ** 2
+        + (2 * arrays if npz else 0)
+    )
+    disk = arrays * (2 if npz else 1) + (stored_u * (16 * points + 160 * cells) if paraview else 0)
+    return Estimate(float(memory), float(disk))
+
+
+def _estimate_sizes(sizes: Sizes) -> Estimate:
+    cells = max(sizes.cells, 1)
+    contact = int(2 * math.sqrt(cells)) + 2
+    return estimate(
+        levels=sizes.levels,
+        points=2 * cells + 2 * int(math.sqrt(cells)) + 4,
+        cells=cells,
+        contact=contact,
+        kept=sizes.kept,
+        stored_u=sizes.stored_u,
+        paraview=sizes.paraview,
+    )
+
+
+def _check(est: Estimate, outdir: str | Path | None, where: str) -> None:
+    mem = available_memory()
+    if mem and est.memory > mem:
+        raise PlanError(
+            f"{where}: the run needs about {_size(est.memory)} of memory, {_size(mem)} are "
+            "available; use a coarser mesh, fewer levels or a larger [output] every, or "
+            "--force-size to run anyway"
+        )
+    if outdir is not None:
+        free = free_disk(outdir)
+        if est.disk > free:
+            raise PlanError(
+                f"{where}: the output needs about {_size(est.disk)} of disk, {_size(free)} are "
+                f"free at {outdir}; store fewer levels ([output] store_u, every) or use "
+                "--force-size to run anyway"
+            )
+
+
+def admit_sizes(outdir: str | Path | None = None, *, force_size: bool = False):
+    """An ``admit`` hook for :func:`vemwear.config.load_config`: refuses sizes that would
+    not fit (:class:`PlanError`, one line with the numbers) unless ``force_size``."""
+
+    def admit(sizes: Sizes) -> None:
+        if not force_size:
+            _check(_estimate_sizes(sizes), outdir, sizes.source)
+
+    return admit
+
+
+def estimate_config(cfg: Config) -> Estimate:
+    """The estimate of a validated configuration, from its real mesh and time grid."""
+    out = cfg.output
+    pr = cfg.problem
+    L = len(pr.time.t)
+    stored = len(out.u_levels)
+    kept = len({*range(0, L, out.every), L - 1, *map(int, out.u_levels)}) if L < 10**7 else L
+    return estimate(
+        levels=L,
+        points=pr.mesh.n_points,
+        cells=pr.mesh.n_cells,
+        contact=len(pr.contact.nodes),
+        kept=kept,
+        stored_u=stored,
+        paraview=out.vtk,
+    )

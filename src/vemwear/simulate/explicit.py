@@ -1,0 +1,55 @@
+"""When the explicit wear rule (3.22) can overshoot.
+
+The left rectangle rule ``w^{n+1} = w^n + k_n alpha(t_n) p(u_nu^n - w^n)``, with
+``alpha = kappa |v*|``, is explicit in the wear: on a node pressed into the soft layer
+with a fixed ``u_nu``, the penetration ``r = u_nu - w`` evolves as
+``r^{n+1} = r^n - k_n alpha p(r^n)``, which for a law of slope up to ``L_p`` overshoots
+(``r`` changes sign: more wear than the layer was penetrated) as soon as
+``k_n alpha(t_n) L_p >= 1``. :func:`overshoot` measures that number on the time grid;
+the command line warns when it is at least 1 (docs/method.md).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from .problem import Problem
+
+__all__ = ["overshoot", "overshoot_warning"]
+
+
+def overshoot(problem: Problem) -> tuple[float, int, float]:
+    """``(max_n k_n max_a kappa_a |v*(t_n)| L_p, the level n, the largest safe step)``.
+
+    The safe step is ``1 / max_n (max_a kappa_a |v*(t_n)| L_p)`` (inf if there is no wear).
+    """
+    t = problem.time.t
+    if len(t) < 2:
+        return 0.0, 0, float("inf")
+    kappa = float(np.max(problem.nodal["kappa"], initial=0.0))
+    L_p = float(getattr(problem.p, "lipschitz", 0.0))
+    if not np.isfinite(L_p):
+        return 0.0, 0, float("inf")
+    v = problem.v_star
+    speed = np.array([v.speed(float(x)) for x in t[:-1]])  # type: ignore[union-attr]
+    rate = kappa * speed * L_p
+    value = np.diff(t) * rate
+    n = int(np.argmax(value))
+    top = float(rate.max())
+    return float(value[n]), n, (1.0 / top if top > 0 else float("inf"))
+
+
+def overshoot_warning(problem: Problem) -> str | None:
+    """A one-line warning when the explicit wear can overshoot, else None."""
+    value, n, safe = overshoot(problem)
+    if value < 1.0:
+        return None
+    t = float(problem.time.t[n])
+    return (
+        f"the explicit wear update can overshoot: k kappa |v*| L_p = {value:.3g} >= 1 at "
+        f"level {n} (t = {t:g}); the wear may exceed the penetration and oscillate. Use "
+        f"time steps below {safe:.3g}"
+    )
