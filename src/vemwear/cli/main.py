@@ -15,10 +15,12 @@ subcommand: one job, kept in one place so that the command table reads at a glan
 from __future__ import annotations
 
 import argparse
+import errno
 import os
 import sys
 import time
 import traceback
+import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -547,11 +549,19 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
             ("vemwear.runner.outdir", "OutputDirError"),
             ("vemwear.runner.plan", "PlanError"),
             ("vemwear.mesh.polymesh", "MeshError"),
+            ("vemwear.simulate.problem", "DataError"),
         )
     ):
         return EXIT_INPUT, str(exc)
+    if _is(exc, "vemwear.solvers.system", "FactorizationError"):
+        return EXIT_CONVERGENCE, f"the solver failed: {exc}"
     if _is(exc, "vemwear.solvers.system", "ConvergenceError"):
         return EXIT_CONVERGENCE, f"the solver did not converge: {exc}"
+    if isinstance(exc, MemoryError):
+        return EXIT_INTERNAL, "out of memory; use a coarser mesh or keep fewer levels"
+    if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT):
+        where = f" writing {exc.filename}" if exc.filename else ""
+        return EXIT_INTERNAL, f"the disk is full{where}; free some space"
     return EXIT_INTERNAL, f"internal error: {type(exc).__name__}: {exc}"
 
 
@@ -580,7 +590,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         from ..runner.signals import signals_as_interrupts
 
-        with signals_as_interrupts():
+        with signals_as_interrupts(), warnings.catch_warnings():
+            if not debug:  # overflows are reported by the checks of the library, in words
+                warnings.simplefilter("ignore", RuntimeWarning)
             return func(args)
     except BrokenPipeError:  # stdout closed early (``vemwear check ... | head``): not an error
         try:  # no second error when Python flushes stdout at exit

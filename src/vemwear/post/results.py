@@ -231,13 +231,16 @@ def summarize(result: Result) -> dict[str, Any]:
     dict
         ``{"statistics": {...}, "outputs": {...}}`` with plain Python numbers.
     """
-    c = int(result.completed)  # a partial result: statistics of the finished levels
+    # the kept rows of the finished levels (all of them for a complete run)
+    c = int(np.searchsorted(np.asarray(result.levels), int(result.completed)))
     it = np.asarray(result.iterations)[:c]
     res = np.asarray(result.residuals)[:c]
     names = tuple(result.RESIDUAL_NAMES)
+    L = len(result.problem.time.t)
     stats: dict[str, Any] = {
-        "levels": len(result.t),
-        "steps": len(result.t) - 1,
+        "levels": L,
+        "steps": L - 1,
+        "kept_levels": len(result.t),
         "contact_nodes": len(result.contact_nodes),
         "iterations_total": int(it.sum()),
         "iterations_max": int(it.max(initial=0)),
@@ -280,7 +283,9 @@ def _summary(
     partial: dict[str, Any] = {"partial": bool(result.is_partial or reason is not None)}
     if partial["partial"]:
         partial.update(
-            completed=int(result.completed), levels=len(result.t), reason=reason or "interrupted"
+            completed=int(result.completed),
+            levels=len(result.problem.time.t),
+            reason=reason or "interrupted",
         )
     return {
         "format": FORMAT,

@@ -34,6 +34,10 @@ from ..vem.assembly import Field
 from .timegrid import TimeGrid
 
 
+class DataError(ValueError):
+    """Data that give non-finite numbers (an overflow), named with the quantity."""
+
+
 @dataclass(frozen=True, eq=False)
 class Problem:
     """Contact problem with wear on a tagged polygonal mesh (Problem 2.1 / 3.3).
@@ -185,7 +189,14 @@ class Discretization:
         cl = mesh.part_vertices("clamped")
         fixed[2 * cl] = fixed[2 * cl + 1] = True
         self.free = np.flatnonzero(~fixed)
-        self.K_full = stiffness(mesh, problem.material, problem.stabilization)
+        with np.errstate(all="ignore"):
+            self.K_full = stiffness(mesh, problem.material, problem.stabilization)
+        if not np.all(np.isfinite(self.K_full.data)):
+            mat = problem.material
+            raise DataError(
+                f"[material] lam = {mat.lam:g}, eta = {mat.eta:g} give a stiffness matrix with "
+                "non-finite entries (an overflow); use values of a sensible scale"
+            )
         K = self.K_full[self.free][:, self.free].tocsr()
         index = -np.ones(ndof, dtype=np.int64)
         index[self.free] = np.arange(len(self.free))
@@ -212,8 +223,14 @@ class Discretization:
         if self._constant_load and self._F0 is not None:
             return self._F0
         pr = self.problem
-        F = body_force_vector(pr.mesh, pr.f1, t) + traction_vector(pr.mesh, pr.f2, t)
+        with np.errstate(all="ignore"):
+            F = body_force_vector(pr.mesh, pr.f1, t) + traction_vector(pr.mesh, pr.f2, t)
         F = F[self.free]
+        if not np.all(np.isfinite(F)):
+            raise DataError(
+                f"[loads] f1, f2 give a load vector with non-finite entries at t = {t:g} (an "
+                "overflow); use loads of a sensible scale"
+            )
         if self._constant_load:
             self._F0 = F
         return F

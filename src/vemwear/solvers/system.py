@@ -31,6 +31,10 @@ class ConvergenceError(RuntimeError):
     """A step problem whose solver did not reach its tolerance."""
 
 
+class FactorizationError(ConvergenceError):
+    """A sparse factorization failed (a singular or indefinite matrix)."""
+
+
 @dataclass(frozen=True, eq=False)
 class ContactSystem:
     """Data of the step problem that do not change in time.
@@ -166,8 +170,15 @@ def check_converged(
     residuals: dict[str, float], tol: float, step: StepData, method: str, iterations: int
 ) -> None:
     """Raise :class:`ConvergenceError` naming the time level when a residual is above tol."""
+    bad = [k for k, v in residuals.items() if not np.isfinite(v)]
+    if bad:
+        raise ConvergenceError(
+            f"{method}: non-finite values at time level {step.level} (t = {step.t:.6g}): the "
+            f"{bad[0]} residual is {residuals[bad[0]]}; the data overflow (check the scale of "
+            "the loads, the material and the contact data)"
+        )
     worst = max(residuals, key=lambda k: residuals[k])
-    if not residuals[worst] <= tol:  # also catches NaN
+    if not residuals[worst] <= tol:
         raise ConvergenceError(
             f"{method} did not converge at time level {step.level} (t = {step.t:.6g}) after "
             f"{iterations} iterations: {worst} residual {residuals[worst]:.3e} > tol {tol:.1e}"

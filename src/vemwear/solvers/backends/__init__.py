@@ -18,6 +18,8 @@ interface, plus one line in :data:`_MODULES`.
 from __future__ import annotations
 
 import importlib
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -95,9 +97,10 @@ def factorize(
     (see :func:`resolve_backend`).
     """
     chosen = resolve_backend(backend, A.shape[0], many_factorizations)
-    if chosen == "pardiso":
-        return _module("pardiso").PardisoFactor(A, spd=symmetric)
-    return _module("scipy").SuperLUFactor(A, symmetric=symmetric)
+    with _failures(chosen):
+        if chosen == "pardiso":
+            return _module("pardiso").PardisoFactor(A, spd=symmetric)
+        return _module("scipy").SuperLUFactor(A, symmetric=symmetric)
 
 
 def schur_factorize(
@@ -116,9 +119,24 @@ def schur_factorize(
     backend : a name of :data:`BACKENDS`
     """
     chosen = resolve_backend(backend)
-    if chosen == "pardiso":
-        return _module("pardiso").PardisoSchur(K, last, points)
-    return _module("scipy").SuperLUSchur(K, last, points)
+    with _failures(chosen):
+        if chosen == "pardiso":
+            return _module("pardiso").PardisoSchur(K, last, points)
+        return _module("scipy").SuperLUSchur(K, last, points)
+
+
+@contextmanager
+def _failures(backend: str) -> Iterator[None]:
+    """A failed factorization (singular or indefinite matrix) as a FactorizationError."""
+    from ..system import FactorizationError
+
+    try:
+        yield
+    except (RuntimeError, np.linalg.LinAlgError) as exc:
+        raise FactorizationError(
+            f"the stiffness matrix could not be factorized ({backend}: {exc}); it is singular "
+            "or not positive definite (rigid motions not removed, or material data out of range)"
+        ) from None
 
 
 __all__ = [

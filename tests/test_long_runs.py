@@ -1,0 +1,266 @@
+"""Long runs in real processes: killed, hung up, interrupted twice, run twice at once.
+
+Each test starts ``vemwear run`` as a separate process, sends it real signals, and reads
+what it left with NumPy and h5py. A run killed with SIGKILL after a checkpoint resumes
+with ``--resume`` to arrays that are bitwise those of a run that never stopped.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from conftest import small_config
+
+STEPS = 12000  # about 2-3 s of solving on 16 x 8 squares
+
+LONG = small_config(
+    "long run",
+    divisions=(16, 8),
+    steps=STEPS,
+    output={"store_u": 1000, "checkpoint": 0.2, "figures": False, "vtk": False},
+)
+
+
+def start(config: Path, out: Path, *extra: str) -> subprocess.Popen[str]:
+    cmd = [sys.executable, "-m", "vemwear", "run", str(config), "-o", str(out), "--no-progress"]
+    return subprocess.Popen(
+        [*cmd, *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+
+
+def run(config: Path, out: Path, *extra: str) -> subprocess.CompletedProcess[str]:
+    cmd = [sys.executable, "-m", "vemwear", "run", str(config), "-o", str(out), "--no-progress"]
+    return subprocess.run([*cmd, *extra], capture_output=True, text=True, timeout=300)
+
+
+def wait_for(path: Path, proc: subprocess.Popen[str], timeout: float = 120.0) -> None:
+    t0 = time.monotonic()
+    while not path.exists():
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() - t0 < timeout, f"{path} did not appear"
+        time.sleep(0.02)
+
+
+def arrays(out: Path) -> dict[str, np.ndarray]:
+    with np.load(out / "result.npz", allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}
+
+
+@pytest.fixture(scope="module")
+def config(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    p = tmp_path_factory.mktemp("long") / "long.toml"
+    p.write_text(LONG)
+    return p
+
+
+@pytest.fixture(scope="module")
+def reference(config: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[str, np.ndarray]:
+    out = tmp_path_factory.mktemp("ref") / "out"
+    done = run(config, out)
+    assert done.returncode == 0, done.stderr
+    return arrays(out)
+
+
+def assert_same(out: Path, reference: dict[str, np.ndarray]) -> None:
+    got = arrays(out)
+    assert got.keys() == reference.keys()
+    for k, v in reference.items():
+        assert got[k].dtype == v.dtype and np.array_equal(got[k], v), k
+
+
+def test_sigkill_after_a_checkpoint_resumes_bitwise(
+    config: Path, tmp_path: Path, reference: dict[str, np.ndarray]
+) -> None:
+    out = tmp_path / "out"
+    proc = start(config, out)
+    wait_for(out / "checkpoint.npz", proc)
+    time.sleep(0.3)  # past the first checkpoint, in the middle of writing levels
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    assert proc.returncode == -signal.SIGKILL
+    with np.load(out / "checkpoint.npz") as z:
+        completed = int(z["completed"])
+    assert 0 < completed < STEPS + 1
+    with h5py.File(out / "result.h5", "r") as f:  # readable after the kill
+        assert f["wear"].shape[0] == STEPS + 1
+    marker = json.loads((out / ".vemwear").read_text())
+    assert marker["state"] == "running"  # nobody told it otherwise: it was killed
+    resumed = run(config, out, "--resume")
+    assert resumed.returncode == 0, resumed.stderr
+    assert f"resumed from level {completed}" in resumed.stdout or "resumed from level" in (
+        resumed.stdout
+    )
+    assert_same(out, reference)
+    assert not (out / "checkpoint.npz").exists()
+    assert json.loads((out / ".vemwear").read_text())["state"] == "complete"
+
+
+@pytest.mark.parametrize("sig", [signal.SIGHUP, signal.SIGTERM])
+def test_hangup_and_terminate_keep_the_finished_levels(
+    config: Path, tmp_path: Path, reference: dict[str, np.ndarray], sig: signal.Signals
+) -> None:
+    out = tmp_path / "out"
+    proc = start(config, out)
+    wait_for(out / "checkpoint.npz", proc)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert err.startswith("vemwear: interrupted; the ") and "--resume" in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["partial"] is True and summary["reason"].endswith(f"({sig.name})")
+    assert "UNFINISHED" in (out / "PARTIAL.txt").read_text()
+    assert run(config, out, "--resume").returncode == 0
+    assert_same(out, reference)
+
+
+def test_second_ctrl_c_does_not_abandon_the_save(
+    config: Path, tmp_path: Path, reference: dict[str, np.ndarray]
+) -> None:
+    out = tmp_path / "out"
+    proc = start(config, out)
+    wait_for(out / "checkpoint.npz", proc)
+    proc.send_signal(signal.SIGINT)
+    time.sleep(0.002)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "are saved in" in err
+    assert json.loads((out / "summary.json").read_text())["partial"] is True
+    assert run(config, out, "--resume").returncode == 0
+    assert_same(out, reference)
+
+
+def test_a_second_run_into_the_same_directory_is_refused(tmp_path: Path) -> None:
+    config = tmp_path / "longer.toml"  # long enough to outlive three refused runs
+    config.write_text(LONG.replace(f"steps = {STEPS}", "steps = 400000"))
+    out = tmp_path / "out"
+    first = start(config, out)
+    try:
+        wait_for(out / "checkpoint.npz", first)
+        before = sorted(p.name for p in out.iterdir())
+        for extra in ([], ["--force"], ["--resume"]):
+            second = run(config, out, *extra)
+            assert second.returncode == 2
+            assert f"another vemwear run (pid {first.pid}) is writing into {out}" in second.stderr
+        after = sorted(p.name for p in out.iterdir())
+        assert set(after) <= set(before) | {"result.npz"}  # the second one added nothing
+        other = tmp_path / "other"
+        assert run(config, other, "--resume").returncode == 2
+        assert not other.exists()  # a refused run leaves nothing behind
+    finally:
+        first.send_signal(signal.SIGINT)
+        first.communicate(timeout=60)
+
+
+def test_stale_temporaries_are_reported_and_cleaned(tmp_path: Path) -> None:
+    cfg = tmp_path / "case.toml"
+    cfg.write_text(small_config("stale", output={"figures": False, "vtk": False}))
+    out = tmp_path / "out"
+    assert run(cfg, out).returncode == 0
+    stale_in = out / ".result.tmp-abcd1234.npz"  # what a killed atomic write leaves
+    stale_in.write_bytes(b"x")
+    stale_next = tmp_path / ".out.tmp-abcd1234"
+    stale_next.mkdir()
+    (out / "notes.txt").write_text("mine")
+    again = run(cfg, out, "--force")
+    assert again.returncode == 0
+    assert not stale_in.exists() and not stale_next.exists()  # --force removes them
+    stale_in.write_bytes(b"x")
+    other = tmp_path / "other"
+    warn = run(cfg, other)
+    assert warn.returncode == 0 and "temporary" not in warn.stderr
+    clean = subprocess.run(
+        [sys.executable, "-m", "vemwear", "clean", str(out)], capture_output=True, text=True
+    )
+    assert clean.returncode == 0 and str(stale_in) in clean.stdout
+    assert not stale_in.exists() and (out / "notes.txt").read_text() == "mine"
+    assert (out / "result.npz").exists()  # vemwear's output stays without --all
+    gone = subprocess.run(
+        [sys.executable, "-m", "vemwear", "clean", str(out), "--all"], capture_output=True, text=True
+    )
+    assert gone.returncode == 0
+    assert sorted(p.name for p in out.iterdir()) == ["notes.txt"]
+
+
+def test_overshoot_warning(tmp_path: Path) -> None:
+    cfg = tmp_path / "case.toml"
+    cfg.write_text(small_config("overshoot", contact={"kappa": 500.0}))
+    check = subprocess.run(
+        [sys.executable, "-m", "vemwear", "check", str(cfg)], capture_output=True, text=True
+    )
+    assert check.returncode == 0
+    assert "vemwear: warning: the explicit wear update can overshoot: k kappa |v*| L_p = 25 " in (
+        check.stderr
+    )
+    assert "Use time steps below 0.005" in check.stderr
+    cfg.write_text(small_config("fine", contact={"kappa": 2.0}))
+    check = subprocess.run(
+        [sys.executable, "-m", "vemwear", "check", str(cfg)], capture_output=True, text=True
+    )
+    assert check.returncode == 0 and "overshoot" not in check.stderr
+    assert "memory (estimate)" in check.stdout and "disk (estimate)" in check.stdout
+
+
+@pytest.mark.parametrize(
+    ("section", "value", "code", "says"),
+    [
+        ("material", {"lam": 1e308}, 3, "the stiffness matrix could not be factorized"),
+        ("loads", {"f1": [0.0, -1e308]}, 3, "non-finite values at time level 0"),
+        ("time", {"steps": 1_000_000_000}, 2, "of memory"),
+        ("mesh", {"generator": "voronoi", "n_cells": 100_000_000, "divisions": None}, 2, "memory"),
+    ],
+)
+def test_extreme_values_end_in_one_clear_line(
+    tmp_path: Path, section: str, value: dict, code: int, says: str
+) -> None:
+    cfg = tmp_path / "case.toml"
+    cfg.write_text(small_config("extreme", **{section: value}))
+    out = tmp_path / "out"
+    done = run(cfg, out)
+    assert done.returncode == code, done.stderr
+    assert done.stderr.count("\n") == 1 and says in done.stderr
+    assert "internal error" not in done.stderr and "Warning" not in done.stderr
+    assert not out.exists()
+
+
+def test_peak_memory_does_not_grow_with_the_levels(tmp_path: Path) -> None:
+    """The kept rows stream to disk: 20 times more levels cost no memory (within 25 %),
+    while result.h5 grows. Peak RSS of the child measured by the kernel."""
+    code = (
+        "import resource, sys\n"
+        "from vemwear.cli.main import main\n"
+        "c = main(['run', sys.argv[1], '-o', sys.argv[2], '--no-progress'])\n"
+        "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n"
+        "sys.exit(c)\n"
+    )
+    peaks = {}
+    for steps in (500, 10000):
+        cfg = tmp_path / f"s{steps}.toml"
+        cfg.write_text(
+            small_config(
+                "mem",
+                divisions=(16, 8),
+                steps=steps,
+                output={"store_u": "final", "every": 10, "figures": False, "vtk": False},
+            )
+        )
+        out = tmp_path / f"o{steps}"
+        done = subprocess.run(
+            [sys.executable, "-c", code, str(cfg), str(out)], capture_output=True, text=True
+        )
+        assert done.returncode == 0, done.stderr
+        peaks[steps] = int(done.stdout.split()[-1])
+    assert peaks[10000] < 1.25 * peaks[500], peaks
+    assert os.path.getsize(tmp_path / "o10000" / "result.h5") > os.path.getsize(
+        tmp_path / "o500" / "result.h5"
+    )
