@@ -186,7 +186,9 @@ def test_stale_temporaries_are_reported_and_cleaned(tmp_path: Path) -> None:
     assert not stale_in.exists() and (out / "notes.txt").read_text() == "mine"
     assert (out / "result.npz").exists()  # vemwear's output stays without --all
     gone = subprocess.run(
-        [sys.executable, "-m", "vemwear", "clean", str(out), "--all"], capture_output=True, text=True
+        [sys.executable, "-m", "vemwear", "clean", str(out), "--all"],
+        capture_output=True,
+        text=True,
     )
     assert gone.returncode == 0
     assert sorted(p.name for p in out.iterdir()) == ["notes.txt"]
