@@ -263,6 +263,12 @@ def test_peak_memory_does_not_grow_with_the_levels(tmp_path: Path) -> None:
         assert done.returncode == 0, done.stderr
         peaks[steps] = int(done.stdout.split()[-1])
     assert peaks[10000] < 1.25 * peaks[500], peaks
+    # the plan's estimate of the peak memory is within a factor 2 of the measured one
+    from vemwear.config import load_config
+    from vemwear.runner.plan import estimate_config
+
+    est = estimate_config(load_config(tmp_path / "s10000.toml")).memory
+    assert 0.5 < est / (1024 * peaks[10000]) < 2.0, (est, peaks)
     assert os.path.getsize(tmp_path / "o10000" / "result.h5") > os.path.getsize(
         tmp_path / "o500" / "result.h5"
     )

@@ -148,11 +148,13 @@ def result_rows(result: Result) -> Rows:
     wT = np.asarray(result.wear[-1])
     a = int(np.argmax(wT)) if wT.size else 0
     at = np.asarray(result.contact_points[a]).tolist() if wT.size else []
-    k = np.diff(result.t)
+    t = result.problem.time.t
+    k = np.diff(t)
     return [
         (
             "levels",
-            f"{len(result.t)} (T = {result.t[-1]:g}, {format_k(float(k.min()), float(k.max()))})"
+            f"{len(t)} (T = {t[-1]:g}, {format_k(float(k.min()), float(k.max()))})"
+            + (f", {len(result.t)} kept" if len(result.t) < len(t) else "")
             if k.size
             else "1",
         ),
