@@ -2,13 +2,15 @@
 
 :func:`estimate` gives peak memory and disk bytes from the sizes of a run. The model:
 
-* memory: 160 MB for the interpreter and the libraries; the sparse factorization of the
-  stiffness, about ``250 N log2 N`` bytes for N unknowns (nested dissection in 2D;
-  measured with ``/usr/bin/time`` on squares from 64 x 32 to 512 x 256 cells: 167, 197,
-  439 and 826 MB peak against 160 MB + 81, 460, 2080, 8860 ... of this term, within a
-  factor 2 everywhere); 24 bytes per time level (the time grid and the level tables);
-  the dense inverse of the contact block, ``3 * 8 m^2``; and, when the run ends, the
-  kept arrays in memory for ``result.npz`` (twice: read and written);
+* memory: the interpreter and the libraries, what this process holds when the plan is
+  made plus 60 MB for the libraries loaded later, and at least 160 MB (how much the
+  libraries take depends on the machine: OpenBLAS keeps buffers per core); the sparse
+  factorization of the stiffness, about ``250 N log2 N`` bytes for N unknowns (nested
+  dissection in 2D; measured with ``/usr/bin/time`` on rectangles of 64 x 32 to
+  512 x 256 cells: 167, 197, 439 and 826 MB peak against 173, 219, 426 and 1347 MB
+  estimated, within a factor 2 everywhere); 24 bytes per time level (the time grid and
+  the level tables); the dense inverse of the contact block, ``3 * 8 m^2``; and, when
+  the run ends, the kept arrays in memory for ``result.npz`` (twice: read and written);
 * disk: ``result.h5`` (the kept contact rows, ``7 * 8 m`` bytes each, and the stored
   displacements, ``16 n`` bytes each), ``result.npz`` (as much again), and the ParaView
   series (about ``16 n + 160 C`` bytes per stored displacement).
@@ -27,15 +29,23 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..util.system import available_memory, free_disk
+from ..util.system import available_memory, free_disk, resident_memory
 
 if TYPE_CHECKING:
     from ..config import Config
     from ..config.build import Sizes
 
-__all__ = ["Estimate", "PlanError", "admit_sizes", "estimate", "estimate_config"]
+__all__ = ["Estimate", "PlanError", "admit_sizes", "base_memory", "estimate", "estimate_config"]
 
 _BASE = 160e6
+_LATER = 60e6
+
+
+def base_memory() -> float:
+    """The memory of a run before its arrays: the interpreter and the libraries."""
+    return max(_BASE, resident_memory() + _LATER)
+
+
 _FACTOR = 250.0
 
 
@@ -68,6 +78,7 @@ def estimate(
     stored_u: int,
     paraview: bool,
     npz: bool = True,
+    base: float | None = None,
 ) -> Estimate:
     """Peak memory and disk of a run (the model of the module docstring).
 
@@ -83,13 +94,15 @@ def estimate(
         Whether a ParaView series is written.
     npz : bool
         Whether ``result.npz`` is written (its arrays are then held in memory).
+    base : float, optional
+        The memory before the run's arrays; :func:`base_memory` by default.
     """
     n = max(2 * points, 2)
     rows = kept * (7 * 8 * contact + 32)
     disp = stored_u * 16 * points
     arrays = rows + disp
     memory = (
-        _BASE
+        (base_memory() if base is None else base)
         + _FACTOR * n * math.log2(n)
         + 24 * levels
         + 24 * float(contact) ** 2
@@ -142,8 +155,9 @@ def admit_sizes(outdir: str | Path | None = None, *, force_size: bool = False):
     return admit
 
 
-def estimate_config(cfg: Config) -> Estimate:
-    """The estimate of a validated configuration, from its real mesh and time grid."""
+def estimate_config(cfg: Config, *, base: float | None = None) -> Estimate:
+    """The estimate of a validated configuration, from its real mesh and time grid
+    (``base`` as in :func:`estimate`)."""
     out = cfg.output
     pr = cfg.problem
     L = len(pr.time.t)
@@ -157,4 +171,5 @@ def estimate_config(cfg: Config) -> Estimate:
         kept=kept,
         stored_u=stored,
         paraview=out.vtk,
+        base=base,
     )

@@ -1,4 +1,4 @@
-"""What the machine offers: available memory and free disk space."""
+"""What the machine offers: available memory, free disk space, this process's memory."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import os
 import shutil
 from pathlib import Path
 
-__all__ = ["available_memory", "free_disk"]
+__all__ = ["available_memory", "free_disk", "resident_memory"]
 
 
 def available_memory() -> int:
@@ -31,3 +31,21 @@ def free_disk(path: str | os.PathLike[str]) -> int:
     while not p.exists():
         p = p.parent
     return shutil.disk_usage(p).free
+
+
+def resident_memory() -> int:
+    """Bytes of memory this process holds now (Linux ``VmRSS``; elsewhere its peak
+    resident size, or 0 if unknown)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        import resource
+
+        return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
+    except (ImportError, OSError):
+        return 0
