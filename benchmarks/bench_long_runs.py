@@ -3,7 +3,9 @@
 Part 1, memory: ``vemwear run`` on 32 x 16 squares (the paper's data) with
 ``[output] store_u = "final"``, no figures and no ParaView output, for each number of
 steps in ``--steps``; each run is a separate process and its peak resident memory
-(``ru_maxrss`` of the child) is reported, with the size of ``result.h5``. The floor is
+(``ru_maxrss`` of the child) is reported when the time loop ends and at the end of the
+run (which writes ``result.npz`` and the summary from ``result.h5`` in memory), with the
+size of ``result.h5``. The floor is
 the same process importing vemwear and building the problem without solving (steps =
 1), measured in the same run. Runs are repeated ``--repeat`` times, interleaved.
 
@@ -62,8 +64,9 @@ checkpoint = {checkpoint}
 """
 
 
-def _run(config: str, tmp: Path) -> tuple[float, float, int]:
-    """Wall seconds, peak RSS (MB) of the child and the size of result.h5 (bytes)."""
+def _run(config: str, tmp: Path) -> tuple[float, float, float, int]:
+    """Wall seconds, peak RSS (MB) of the child during the time loop and in all, and the
+    size of result.h5 (bytes)."""
     cfg = tmp / "case.toml"
     cfg.write_text(config)
     out = tmp / f"out-{time.monotonic_ns()}"
@@ -73,17 +76,31 @@ def _run(config: str, tmp: Path) -> tuple[float, float, int]:
     wall = time.perf_counter() - t
     if proc.returncode != 0:
         raise SystemExit(f"run failed ({proc.returncode}): {proc.stderr.strip()}")
-    rss_mb = float(proc.stdout.strip().splitlines()[-1]) / 1024
+    loop_kb, total_kb = proc.stdout.strip().splitlines()[-1].split()
     h5 = out / "result.h5"
-    return wall, rss_mb, h5.stat().st_size if h5.exists() else 0
+    return (
+        wall,
+        float(loop_kb) / 1024,
+        float(total_kb) / 1024,
+        h5.stat().st_size if h5.exists() else 0,
+    )
 
 
-# the child reports its own peak RSS (kB), so that earlier children do not count
+# The child reports its own peak RSS (kB), so that earlier children do not count: once
+# when the time loop has ended (before result.npz and the summary are written from
+# result.h5) and once at the end.
 _CHILD = """
 import resource, sys
+import vemwear.runner.run as run
 from vemwear.cli.main import main
+peak = []
+finish = run._finish
+def _finish(*args, **kwargs):
+    peak.append(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+    return finish(*args, **kwargs)
+run._finish = _finish
 code = main(["run", sys.argv[1], "-o", sys.argv[2], "--no-progress"])
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+print(peak[0], resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
 sys.exit(code)
 """
 
@@ -95,10 +112,11 @@ def _stats(v: list[float]) -> str:
 def memory_table(steps: list[int], repeat: int) -> None:
     print("peak memory against the number of steps (32 x 16 squares, store_u = 'final')")
     print(
-        f"{'steps':>8} | {'peak RSS MB (min med max)':>29} | {'wall s (min med max)':>29} | "
-        f"{'result.h5 MB':>12}"
+        f"{'steps':>9} | {'time loop: peak RSS MB':>29} | {'whole run: peak RSS MB':>29} | "
+        f"{'wall s (min med max)':>29} | {'result.h5 MB':>12}"
     )
     cases = [1, *steps]
+    loop: dict[int, list[float]] = {n: [] for n in cases}
     rss: dict[int, list[float]] = {n: [] for n in cases}
     wall: dict[int, list[float]] = {n: [] for n in cases}
     size: dict[int, int] = {}
@@ -114,13 +132,17 @@ def memory_table(steps: list[int], repeat: int) -> None:
                     store_u='"final"',
                     checkpoint=60,
                 )
-                w, r, s = _run(cfg, Path(d))
+                w, lp, r, s = _run(cfg, Path(d))
+                loop[n].append(lp)
                 rss[n].append(r)
                 wall[n].append(w)
                 size[n] = s
     for n in cases:
         label = "1 (floor)" if n == 1 else str(n)
-        print(f"{label:>8} | {_stats(rss[n]):>29} | {_stats(wall[n]):>29} | {size[n] / 1e6:12.2f}")
+        print(
+            f"{label:>9} | {_stats(loop[n]):>29} | {_stats(rss[n]):>29} | "
+            f"{_stats(wall[n]):>29} | {size[n] / 1e6:12.2f}"
+        )
 
 
 def checkpoint_table(every: float, repeat: int) -> None:
@@ -141,7 +163,7 @@ def checkpoint_table(every: float, repeat: int) -> None:
                     store_u=store,
                     checkpoint=cp,
                 )
-                w, _, _ = _run(cfg, Path(d))
+                w, _, _, _ = _run(cfg, Path(d))
                 wall[label].append(w)
     for label in cases:
         print(f"{label:>12} | {_stats(wall[label]):>29}")

@@ -277,3 +277,118 @@ def test_peak_memory_does_not_grow_with_the_levels(tmp_path: Path) -> None:
     assert os.path.getsize(tmp_path / "o10000" / "result.h5") > os.path.getsize(
         tmp_path / "o500" / "result.h5"
     )
+
+
+def test_arrays_too_large_for_memory_end_with_result_h5_and_export(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """When the kept arrays would not fit in the memory available at the end of a run,
+    the run ends with result.h5 alone (one line says so) and ``vemwear export`` writes
+    the result.npz an in-memory run writes. The machine's available memory is made small
+    for the end of the run only (the plan before the run reads it on its own)."""
+    from vemwear.cli.main import main
+    from vemwear.runner.outdir import read_marker
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(small_config("big", steps=40, output={"figures": False, "vtk": False}))
+    assert main(["run", str(cfg), "-o", str(tmp_path / "ref"), "--no-progress"]) == 0
+    capsys.readouterr()
+    monkeypatch.setattr("vemwear.util.system.available_memory", lambda: 1000)
+    out = tmp_path / "out"
+    assert main(["run", str(cfg), "-o", str(out), "--no-progress"]) == 0
+    said = capsys.readouterr().out
+    assert "result.npz, summary.json, figures and ParaView output are not written" in said
+    assert f"vemwear export {out}" in said
+    assert sorted(p.name for p in out.iterdir()) == [".vemwear", ".vemwear.lock", "result.h5"]
+    assert read_marker(out)["state"] == "complete"  # type: ignore[index]
+    # export refuses on this machine, then writes on a larger one
+    assert main(["export", str(out)]) == 2
+    assert "more than the 0.00 GB of memory" in capsys.readouterr().err
+    monkeypatch.undo()
+    assert main(["export", str(out)]) == 0
+    ref, got = arrays(tmp_path / "ref"), arrays(out)
+    assert sorted(got) == sorted(ref)
+    for k in ref:
+        if ref[k].dtype.kind in "fiub":
+            assert np.array_equal(got[k], ref[k]), k
+    assert "result.npz" in read_marker(out)["files"]  # type: ignore[index]
+
+
+@pytest.fixture
+def small_disk(tmp_path: Path):
+    """A real 300 kB file system (tmpfs); mounting needs root, else the test is skipped."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    done = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "size=300k", "tmpfs", str(disk)], capture_output=True
+    )
+    if done.returncode != 0:
+        pytest.skip("mounting a small tmpfs needs root")
+    yield disk
+    subprocess.run(["umount", "-l", str(disk)], check=False)
+
+
+def test_full_disk_keeps_every_solved_level_and_resume_writes_the_outputs(
+    tmp_path: Path, small_disk: Path
+) -> None:
+    """A disk that fills up while the outputs are written (run with --force-size past
+    the plan): one line, exit 1, the streamed levels and the checkpoint kept; with more
+    space, --resume writes the arrays of an uninterrupted run."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(small_config("disk", divisions=(16, 8), steps=40, output={"store_u": "all"}))
+    out = small_disk / "out"
+    done = run(cfg, out, "--force-size")
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.count("\n") == 1 and "the disk is full" in done.stderr
+    assert "every time level is solved and saved" in done.stderr and "--resume" in done.stderr
+    assert (out / "result.h5").is_file() and (out / "checkpoint.npz").is_file()
+    subprocess.run(["mount", "-o", "remount,size=20m", str(small_disk)], check=True)
+    done = run(cfg, out, "--resume")
+    assert done.returncode == 0, done.stderr
+    assert run(cfg, tmp_path / "ref").returncode == 0
+    ref, got = arrays(tmp_path / "ref"), arrays(out)
+    assert sorted(got) == sorted(ref)
+    assert all(np.array_equal(got[k], ref[k]) for k in ref if ref[k].dtype.kind in "fiub")
+
+
+def test_a_run_that_would_not_fit_on_the_disk_is_refused_before_any_work(
+    tmp_path: Path, small_disk: Path
+) -> None:
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(small_config("disk", divisions=(16, 8), steps=400, output={"store_u": "all"}))
+    done = run(cfg, small_disk / "out")
+    assert done.returncode == 2, done.stderr
+    assert (
+        done.stderr.count("\n") == 1 and "of disk" in done.stderr and "--force-size" in done.stderr
+    )
+    assert list(small_disk.iterdir()) == []
+
+
+def test_out_of_memory_is_one_line_and_leaves_nothing(tmp_path: Path) -> None:
+    """A real MemoryError: the child's address space is limited to what it holds after
+    its imports plus 100 MB, too little to solve on 256 x 128 cells (the libraries a run
+    loads are imported before the limit is set)."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(small_config("oom", divisions=(256, 128), steps=10))
+    code = (
+        "import hashlib, resource, sys\n"
+        "import h5py, scipy.sparse.linalg\n"
+        "from vemwear.cli.main import main\n"
+        "vm = next(int(l.split()[1]) * 1024 for l in open('/proc/self/status')\n"
+        "          if l.startswith('VmSize:'))\n"
+        "resource.setrlimit(resource.RLIMIT_AS, (vm + 100_000_000, vm + 100_000_000))\n"
+        "sys.exit(main(['run', sys.argv[1], '-o', sys.argv[2], '--no-progress',\n"
+        "               '--force-size']))\n"
+    )
+    out = tmp_path / "out"
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+    done = subprocess.run(
+        [sys.executable, "-c", code, str(cfg), str(out)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+    )
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.count("\n") == 1 and "out of memory" in done.stderr, done.stderr
+    assert not out.exists()

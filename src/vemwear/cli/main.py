@@ -357,6 +357,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     if not args.no_progress:
         say(f"{PROG}: {cfg.title}: " + ", ".join(f"{k} {v}" for k, v in est.rows()))
     result = execute_run(plan, progress=not args.no_progress)
+    if isinstance(result, str):  # the arrays do not fit in memory: result.h5 only
+        print(f"{PROG}: {cfg.title}: done; {result}")
+        return EXIT_OK
     rows = [
         *result_rows(result),
         ("time", f"{time.perf_counter() - t0:.2f} s"),

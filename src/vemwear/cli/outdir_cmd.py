@@ -51,10 +51,16 @@ def cmd_clean(args: argparse.Namespace) -> int:
 
 def cmd_export(args: argparse.Namespace) -> int:
     """``vemwear export OUTDIR``."""
-    from ..post.stream import export_npz
+    import contextlib
 
+    from ..post.stream import export_npz
+    from ..runner.outdir import add_to_marker, output_lock, read_marker
+
+    ours = read_marker(args.outdir) is not None  # lock only what vemwear wrote
     try:
-        path = export_npz(args.outdir, force=args.force)
+        with output_lock(args.outdir) if ours else contextlib.nullcontext():
+            path = export_npz(args.outdir, force=args.force)
+            add_to_marker(args.outdir, [path.name])
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     print(f"{PROG}: wrote {path}")

@@ -43,6 +43,7 @@ __all__ = [
     "LOCK_NAME",
     "MARKER_NAME",
     "OutputDirError",
+    "add_to_marker",
     "atomic_output_dir",
     "check_output_dir",
     "clean_output_dir",
@@ -92,6 +93,13 @@ def write_marker(
         "files": names,
     }
     write_atomic(out / MARKER_NAME, json.dumps(data, indent=2) + "\n")
+
+
+def add_to_marker(outdir: str | os.PathLike[str], names: Sequence[str]) -> None:
+    """Record more files vemwear wrote in ``outdir`` (if it has a marker)."""
+    old = read_marker(outdir)
+    if old is not None:
+        write_marker(outdir, old["state"], [*old["files"], *names], old.get("command", "run"))
 
 
 # ---------------------------------------------------------------------------- lock

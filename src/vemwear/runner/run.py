@@ -229,9 +229,12 @@ def _reason(exc: BaseException) -> str:
     return f"error: {type(exc).__name__}: {exc}"
 
 
-def execute_run(plan: RunPlan, *, progress: bool = True) -> Result:
+def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
     """Solve, streaming the levels into ``OUTDIR/result.h5`` with checkpoints; write
     the standard files when done.
+
+    Returns the result, or, when its arrays do not fit in memory, a line saying that the
+    run ends with ``result.h5`` alone.
 
     On any error or interruption after at least one finished level, the levels and the
     state are made durable (a last checkpoint) and the exception propagates with an
@@ -367,11 +370,29 @@ It refuses to start if the physics, the discretization or the kept levels change
     )
 
 
-def _finish(plan: RunPlan, timings: dict[str, float]) -> Result:
-    """The standard files of a completed run; the checkpoint is no longer needed."""
-    from ..post.stream import STREAM_NAME, result_from_stream
+def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
+    """The standard files of a completed run; the checkpoint is no longer needed.
+
+    ``result.npz``, the summary, the figures and the ParaView series need the kept arrays
+    in memory (about three times their size: read, summarized, written). When they do not
+    fit, the run ends with ``result.h5`` alone and a line saying so is returned instead
+    of the result (``vemwear export`` writes ``result.npz`` on a larger machine).
+    """
+    from ..post.stream import STREAM_NAME, result_from_stream, stream_bytes
+    from ..util.system import available_memory
 
     cfg, out = plan.cfg, plan.out
+    need, avail = stream_bytes(out / STREAM_NAME), available_memory()
+    if avail and 3 * need > avail:
+        for name in (CHECKPOINT_NAME, PARTIAL_NAME):
+            (out / name).unlink(missing_ok=True)
+        write_marker(out, "complete", [STREAM_NAME], command="run")
+        return (
+            f"the kept arrays take {need / 1e9:.2f} GB, too much for the "
+            f"{avail / 1e9:.2f} GB of memory available: {out / STREAM_NAME} holds the whole "
+            "run; result.npz, summary.json, figures and ParaView output are not written "
+            f"(write result.npz on a larger machine with: vemwear export {out})"
+        )
     extra: dict[str, Any] = {
         "config": cfg.data,
         "config_path": str(plan.config_path.resolve()),
