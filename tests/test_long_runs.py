@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -216,7 +217,9 @@ def test_overshoot_warning(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("section", "value", "code", "says"),
     [
-        ("material", {"lam": 1e308}, 3, "the stiffness matrix could not be factorized"),
+        # K's entries near 1e308: SuperLU either refuses it or its solution underflows,
+        # caught by the equilibrium residual of the level (depends on the SciPy build)
+        ("material", {"lam": 1e308}, 3, "could not be factorized|did not converge at time level"),
         ("loads", {"f1": [0.0, -1e308]}, 3, "non-finite values at time level 0"),
         ("time", {"steps": 1_000_000_000}, 2, "of memory"),
         ("mesh", {"generator": "voronoi", "n_cells": 100_000_000, "divisions": None}, 2, "memory"),
@@ -230,9 +233,10 @@ def test_extreme_values_end_in_one_clear_line(
     out = tmp_path / "out"
     done = run(cfg, out)
     assert done.returncode == code, done.stderr
-    assert done.stderr.count("\n") == 1 and says in done.stderr
+    assert done.stderr.count("\n") == 1 and re.search(says, done.stderr), done.stderr
     assert "internal error" not in done.stderr and "Warning" not in done.stderr
-    assert not out.exists()
+    # nothing, or the finished levels of a solver failure with the note how to resume
+    assert not out.exists() or (code == 3 and (out / "PARTIAL.txt").is_file())
 
 
 def test_peak_memory_does_not_grow_with_the_levels(tmp_path: Path) -> None:

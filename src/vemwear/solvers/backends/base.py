@@ -58,9 +58,14 @@ def compliance_from_schur(S: NDArray[np.float64]) -> NDArray[np.float64]:
     Raises
     ------
     numpy.linalg.LinAlgError
-        If ``S`` is not positive definite (K was not SPD).
+        If ``S`` is not positive definite (K was not SPD) or not finite.
     """
     S = np.array(S, dtype=float, order="F", copy=True)
+    if not np.isfinite(np.tril(S)).all():  # LAPACK would not notice NaN pivots
+        raise np.linalg.LinAlgError(
+            "the Schur complement on the contact dofs has non-finite entries: the "
+            "stiffness overflows (material data out of range)"
+        )
     potrf, potri = sla.get_lapack_funcs(("potrf", "potri"), (S,))
     with solver_threads():
         L, info = potrf(S, lower=True, overwrite_a=True, clean=False)
@@ -74,4 +79,9 @@ def compliance_from_schur(S: NDArray[np.float64]) -> NDArray[np.float64]:
     if info2 != 0:  # pragma: no cover - potrf succeeded, so the factor is regular
         raise np.linalg.LinAlgError(f"inverting the Schur complement failed (info {info2})")
     inv = np.tril(inv)
+    if not np.isfinite(inv).all():
+        raise np.linalg.LinAlgError(
+            "the inverse of the Schur complement on the contact dofs overflows: the "
+            "stiffness is singular to working precision"
+        )
     return inv + np.tril(inv, -1).T
