@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from .polymesh import PARTS, Mesh, MeshError, part_code
 
@@ -79,6 +78,8 @@ def check_simple(mesh: Mesh) -> None:
 
 def check_vertices(mesh: Mesh, rtol: float = 1e-10) -> None:
     """No two vertices coincide and every vertex belongs to a cell."""
+    from scipy.spatial import cKDTree  # loaded with the first mesh: start-up time
+
     used = np.zeros(mesh.n_points, dtype=bool)
     used[mesh.cell_vertices] = True
     if not np.all(used):
@@ -111,6 +112,8 @@ def check_conforming(mesh: Mesh, rtol: float = 1e-9) -> None:
         raise MeshError("the mesh has no boundary edges")
     a, b = mesh.points[be[:, 0]], mesh.points[be[:, 1]]
     mid, half = 0.5 * (a + b), 0.5 * np.linalg.norm(b - a, axis=1)
+    from scipy.spatial import cKDTree
+
     tree = cKDTree(mesh.points[bv])
     tol = rtol * _scale(mesh)
     hits = tree.query_ball_point(mid, half * (1 - 1e-9))

@@ -13,12 +13,15 @@ import contextlib
 import io
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import meshio
 import numpy as np
 
 from .checks import check_cells, check_conforming, check_vertices
 from .polymesh import PARTS, Mesh, MeshError
+
+if TYPE_CHECKING:
+    import meshio
 
 _BLOCK = {3: "triangle", 4: "quad"}
 _POLY_TYPES = ("triangle", "quad", "polygon")
@@ -26,6 +29,8 @@ _POLY_TYPES = ("triangle", "quad", "polygon")
 
 def to_meshio(mesh: Mesh, with_boundary: bool = True) -> meshio.Mesh:
     """Convert to a :class:`meshio.Mesh` (points padded to 3D), cells grouped by size."""
+    import meshio  # loaded with the first mesh file: start-up time
+
     blocks = []
     for n, (_ids, verts) in sorted(mesh.groups.items()):
         blocks.append(meshio.CellBlock(_BLOCK.get(n, "polygon"), verts))
@@ -48,6 +53,7 @@ def from_meshio(m: meshio.Mesh) -> Mesh:
     Boundary parts come from ``line`` cells (see the module docstring); a line tagged
     with two different parts is a :class:`MeshError`.
     """
+
     pts = np.asarray(m.points, dtype=float)
     if pts.ndim != 2 or len(pts) == 0:
         raise MeshError("no points found")
@@ -181,6 +187,8 @@ def read_mesh(path: str | os.PathLike[str], *, check: bool = True) -> Mesh:
         not a polygonal mesh, an edge tagged with two parts, or a failed check (the
         message names the cells, vertices or edges by their ids in the file).
     """
+    import meshio  # loaded with the first mesh file: start-up time
+
     path = Path(path)
     if not path.is_file():
         raise MeshError(f"{path}: {'not a file' if path.exists() else 'no such file'}")
@@ -231,6 +239,8 @@ def write_mesh(mesh: Mesh, path: str | Path, file_format: str | None = None) -> 
     MeshError
         If a Gmsh file would need cells other than triangles and quadrilaterals.
     """
+    import meshio  # loaded with the first mesh file: start-up time
+
     path = Path(path)
     fmt = file_format or ("gmsh22" if path.suffix == ".msh" else None)
     m = to_meshio(mesh)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 from .polymesh import Mesh
 
@@ -105,6 +104,8 @@ def locate_cells(mesh: Mesh, points: ArrayLike, k: int = 12) -> NDArray[np.int64
     """
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     k = min(int(k), mesh.n_cells)
+    from scipy.spatial import cKDTree  # start-up time: only when points are located
+
     _d, cand = cKDTree(vertex_averages(mesh)).query(pts, k=k)
     cand = np.asarray(cand).reshape(len(pts), k)
     V, Vn = padded_edges(mesh)
@@ -160,6 +161,8 @@ def match_vertices(
     C = np.asarray(coarse_points, dtype=float)
     F = np.asarray(fine_points, dtype=float)
     tol = extent_tol(F, tol)
+    from scipy.spatial import cKDTree
+
     dist, idx = cKDTree(F).query(C, k=1)
     bad = np.flatnonzero(~(dist <= tol))
     if bad.size:

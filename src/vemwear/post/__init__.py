@@ -10,41 +10,73 @@
 - :mod:`~vemwear.post.compare`: errors against a reference solution on a nested mesh
   (Example 5.5), convergence orders; :mod:`~vemwear.post.prolong`: coarse functions at
   fine points.
+
+Names are imported on first use (matplotlib only with the figures), so that importing
+the package stays cheap.
 """
 
-from .compare import (
-    Comparison,
-    ErrorHistory,
-    Solution,
-    common_levels,
-    convergence_orders,
-    solution_errors,
-)
-from .maps import plot_deformed, plot_displacement
-from .norms import (
-    ProjectedNorms,
-    contact_l2_norm,
-    displacement_error,
-    exact_errors,
-    projected_norm,
-    wear_error,
-)
-from .plots import (
-    QUANTITIES,
-    compare_profiles,
-    plot_contact_profiles,
-    plot_time_history,
-)
-from .results import (
-    load_result,
-    load_summary,
-    mesh_from_arrays,
-    result_arrays,
-    save_result,
-    summarize,
-)
-from .vtk import cell_strain_stress, write_vtk_series
+from __future__ import annotations
 
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .compare import (
+        Comparison,
+        ErrorHistory,
+        Solution,
+        common_levels,
+        convergence_orders,
+        solution_errors,
+    )
+    from .maps import plot_deformed, plot_displacement
+    from .norms import (
+        ProjectedNorms,
+        contact_l2_norm,
+        displacement_error,
+        exact_errors,
+        projected_norm,
+        wear_error,
+    )
+    from .plots import QUANTITIES, compare_profiles, plot_contact_profiles, plot_time_history
+    from .results import (
+        load_result,
+        load_summary,
+        mesh_from_arrays,
+        result_arrays,
+        save_result,
+        summarize,
+    )
+    from .vtk import cell_strain_stress, write_vtk_series
+
+_WHERE = {
+    "Comparison": "compare",
+    "ErrorHistory": "compare",
+    "Solution": "compare",
+    "common_levels": "compare",
+    "convergence_orders": "compare",
+    "solution_errors": "compare",
+    "plot_deformed": "maps",
+    "plot_displacement": "maps",
+    "ProjectedNorms": "norms",
+    "contact_l2_norm": "norms",
+    "displacement_error": "norms",
+    "exact_errors": "norms",
+    "projected_norm": "norms",
+    "wear_error": "norms",
+    "QUANTITIES": "plots",
+    "compare_profiles": "plots",
+    "plot_contact_profiles": "plots",
+    "plot_time_history": "plots",
+    "load_result": "results",
+    "load_summary": "results",
+    "mesh_from_arrays": "results",
+    "result_arrays": "results",
+    "save_result": "results",
+    "summarize": "results",
+    "cell_strain_stress": "vtk",
+    "write_vtk_series": "vtk",
+}
 __all__ = [
     "QUANTITIES",
     "Comparison",
@@ -73,3 +105,9 @@ __all__ = [
     "wear_error",
     "write_vtk_series",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _WHERE:
+        return getattr(import_module(f".{_WHERE[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
