@@ -352,7 +352,6 @@ def cmd_generate(args: argparse.Namespace) -> int:
     """``vemwear mesh generate FAMILY -o FILE``."""
     import numpy as np
 
-    from ..mesh import PARTS, part_code
     from ..mesh.checks import check_cells, check_conforming, check_vertices
     from ..mesh.quality import hanging_nodes
 
@@ -372,7 +371,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
         check(mesh)
     save_mesh(mesh, out, force=args.force)
     tags = mesh.boundary_tags
-    parts = ", ".join(f"{p} {int(np.sum(tags == part_code(p)))}" for p in PARTS)
+    parts = ", ".join(f"{p} {n}" for p, n in mesh.part_counts().items())
     counts = _ngons({n: len(i) for n, (i, _v) in sorted(mesh.groups.items())})
     print(
         f"{PROG}: mesh generate {args.family}: wrote {out}\n"

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .polymesh import PARTS, Mesh, MeshError, part_code
+from .polymesh import Mesh, MeshError
 
 _SHOW = 10
 
@@ -183,6 +183,11 @@ def _check_nested_pieces(mesh: Mesh) -> None:
             )
 
 
+def _xy(mesh: Mesh, edge: NDArray[np.int64]) -> str:
+    a, b = mesh.points[edge[0]], mesh.points[edge[1]]
+    return f"{a[0]:.6g}, {a[1]:.6g}) to ({b[0]:.6g}, {b[1]:.6g}"
+
+
 def _signed_area(p: NDArray[np.float64]) -> float:
     q = np.roll(p, -1, axis=0)
     return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
@@ -195,10 +200,11 @@ def check_boundary(mesh: Mesh, require: tuple[str, ...] = ("clamped",)) -> None:
         e = mesh.boundary_edges[untagged]
         raise MeshError(
             f"{untagged.size} boundary edges have no boundary part, e.g. edges "
-            f"{_ids(e[:3].tolist())} (vertex ids); tag them as one of {', '.join(PARTS)}"
+            f"{_ids(e[:3].tolist())} (vertex ids) from ({_xy(mesh, e[0])}); put them in a "
+            "part: a clamped, displacement, traction, free or contact part, or 'rest'"
         )
     for name in require:
-        if not np.any(mesh.boundary_tags == part_code(name)):
+        if not mesh.has_part(name):
             raise MeshError(f"the mesh has no {name!r} boundary edges")
 
 

@@ -88,7 +88,7 @@ def perturb_vertices(
         sy = on_x & ~on_y
         P[sx, 0] += d[sx, 0]
         P[sy, 1] += d[sy, 1]
-    return Mesh(P, mesh.cell_offsets, mesh.cell_vertices, mesh.boundary_tags)
+    return Mesh(P, mesh.cell_offsets, mesh.cell_vertices, mesh.boundary_tags, mesh.part_names)
 
 
 def distorted_quads(

@@ -2,8 +2,9 @@
 
 Cells of any vertex count are stored as meshio blocks (``triangle``, ``quad``,
 ``polygon``); boundary parts as ``line`` cells with an integer cell-data field
-``part`` (1 clamped, 2 traction, 3 contact). Gmsh files may instead name their
-boundary lines by physical groups called ``clamped``, ``traction`` and ``contact``.
+``part`` (1 clamped, 2 traction, 3 contact, then the mesh's other part names, which the
+field data ``{name: [code, 1]}`` records). Gmsh files name their boundary lines by
+physical groups of any name; a group without a name is ``physical_<number>``.
 :func:`read_mesh` is the one reader of mesh files: it checks what it reads.
 """
 
@@ -44,7 +45,8 @@ def to_meshio(mesh: Mesh, with_boundary: bool = True) -> meshio.Mesh:
         cell_data["part"].append(np.asarray(mesh.boundary_tags, dtype=np.int32))
         cell_data["cell_id"].append(-np.ones(len(mesh.boundary_edges), np.int64))
     pts = np.column_stack([mesh.points, np.zeros(mesh.n_points)])
-    return meshio.Mesh(pts, blocks, cell_data=cell_data)
+    field_data = {name: np.array([i + 1, 1]) for i, name in enumerate(mesh.part_names)}
+    return meshio.Mesh(pts, blocks, cell_data=cell_data, field_data=field_data)
 
 
 def from_meshio(m: meshio.Mesh) -> Mesh:
@@ -64,6 +66,7 @@ def from_meshio(m: meshio.Mesh) -> Mesh:
     cells: list[np.ndarray] = []
     order: list[np.ndarray] = []
     line_blocks: list[tuple[np.ndarray, np.ndarray | None]] = []
+    part_names = list(PARTS)  # grown by the physical groups of the file, in their order
     names = {int(v[0]): k for k, v in (m.field_data or {}).items() if len(v) and len(v) >= 1}
     for bi, block in enumerate(m.cells):
         data = np.asarray(block.data, dtype=np.int64)
@@ -74,10 +77,21 @@ def from_meshio(m: meshio.Mesh) -> Mesh:
         elif block.type == "line":
             tag = None
             if "part" in m.cell_data:
-                tag = np.asarray(m.cell_data["part"][bi], dtype=np.int64)
+                code = np.asarray(m.cell_data["part"][bi], dtype=np.int64)
+                tag = np.array(
+                    [
+                        _gmsh_part(names.get(int(c), ""), int(c), part_names) if c > 0 else 0
+                        for c in code
+                    ]
+                    if names
+                    else code,
+                    dtype=np.int64,
+                )
             elif "gmsh:physical" in m.cell_data:
                 phys = np.asarray(m.cell_data["gmsh:physical"][bi], dtype=np.int64)
-                tag = np.array([_gmsh_part(names.get(int(p), "")) for p in phys])
+                tag = np.array(
+                    [_gmsh_part(names.get(int(p), ""), int(p), part_names) for p in phys]
+                )
             line_blocks.append((data, tag))
         elif block.type in ("vertex",):
             continue
@@ -94,18 +108,18 @@ def from_meshio(m: meshio.Mesh) -> Mesh:
         used[c] = True
     remap = -np.ones(len(pts), np.int64)
     remap[used] = np.arange(int(used.sum()))
-    mesh = Mesh.from_cells(pts[used], [remap[c] for c in cells])
+    mesh = Mesh.from_cells(pts[used], [remap[c] for c in cells], part_names=part_names)
     if line_blocks:
         mesh = _apply_line_tags(mesh, line_blocks, remap)
     return mesh
 
 
-def _gmsh_part(name: str) -> int:
-    if name not in PARTS:
-        raise MeshError(
-            f"physical group {name!r} on boundary lines is not one of {', '.join(PARTS)}"
-        )
-    return PARTS.index(name) + 1
+def _gmsh_part(name: str, number: int, part_names: list[str]) -> int:
+    """The part code of a gmsh physical group (by its name; unnamed groups by number)."""
+    name = name or f"physical_{number}"
+    if name not in part_names:
+        part_names.append(name)
+    return part_names.index(name) + 1
 
 
 def _apply_line_tags(mesh: Mesh, blocks, remap: np.ndarray) -> Mesh:
@@ -132,14 +146,14 @@ def _apply_line_tags(mesh: Mesh, blocks, remap: np.ndarray) -> Mesh:
     if clash.size:
         i = clash[0]
         a, b = data[i].tolist()
-        old, new = (PARTS[int(c) - 1] for c in (tag[first][inv][i], tag[i]))
+        old, new = (mesh.part_names[int(c) - 1] for c in (tag[first][inv][i], tag[i]))
         raise MeshError(
             f"boundary edge ({a}, {b}) is tagged both {old!r} and {new!r}; every boundary "
             "edge must belong to exactly one part"
         )
     tags = np.array(mesh.boundary_tags, copy=True)
     tags[srt[pos]] = tag
-    return Mesh(mesh.points, mesh.cell_offsets, mesh.cell_vertices, tags)
+    return mesh.with_tags(tags)
 
 
 def _check_dangling(m: meshio.Mesh) -> None:
@@ -249,6 +263,6 @@ def write_mesh(mesh: Mesh, path: str | Path, file_format: str | None = None) -> 
             raise MeshError(f"{path}: gmsh files hold triangles and quads only; use .vtu")
         phys = [np.where(d > 0, d, 0).astype(np.int32) for d in m.cell_data["part"]]
         m.cell_data = {"gmsh:physical": phys, "gmsh:geometrical": phys}
-        m.field_data = {name: np.array([i + 1, 1]) for i, name in enumerate(PARTS)}
+        m.field_data = {name: np.array([i + 1, 1]) for i, name in enumerate(mesh.part_names)}
         m.points = m.points.copy()
     meshio.write(path, m, file_format=fmt)

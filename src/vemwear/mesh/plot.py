@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .polymesh import PARTS, Mesh, part_code
+from .polymesh import Mesh
 from .quality import QualityReport, hanging_nodes, quality_report
 
 if TYPE_CHECKING:
@@ -86,15 +86,17 @@ def plot_mesh(
         extra = ""
     handles = []
     be = mesh.boundary_edges
-    for name in (*PARTS, "untagged"):
-        code = 0 if name == "untagged" else part_code(name)
+    extra_colors = iter(["#762a83", "#e08214", "#35978f", "#c51b7d", "#8c510a", "#4d4d4d"] * 20)
+    colors = {**{n: next(extra_colors) for n in mesh.part_names}, **PART_COLORS}
+    for name in (*mesh.part_names, "untagged"):
+        code = 0 if name == "untagged" else mesh.part_code(name)
         sel = np.asarray(mesh.boundary_tags == code, dtype=bool)
         if not np.any(sel):
             continue
         ax.add_collection(
             LineCollection(
                 P[be[sel]],
-                colors=PART_COLORS[name],
+                colors=colors[name],
                 linewidths=3.0,
                 linestyles="--" if name == "untagged" else "-",
                 capstyle="butt",

@@ -7,8 +7,10 @@ so the mesh is always conforming in the virtual element sense (paper, Remark 4.9
 
 Boundary edges are the directed cell edges whose reverse does not occur in another
 cell; they keep the orientation of their cell, so their outward normal is the edge
-direction turned clockwise. Each boundary edge carries the code of one boundary
-part: ``clamped`` (Gamma_D), ``traction`` (Gamma_N) or ``contact`` (Gamma_C).
+direction turned clockwise. Each boundary edge carries the code of one named
+boundary part: code ``i`` is ``part_names[i - 1]``, 0 is untagged. The paper's parts
+``clamped`` (Gamma_D), ``traction`` (Gamma_N) and ``contact`` (Gamma_C) have codes
+1, 2, 3 by default; any other names (a gmsh physical group, a config's part) follow.
 """
 
 from __future__ import annotations
@@ -20,19 +22,26 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-#: Names of the boundary parts, in the order of their integer codes 1, 2, 3.
+#: The paper's boundary parts, codes 1, 2, 3 of every mesh (then any other names).
 PARTS: tuple[str, ...] = ("clamped", "traction", "contact")
 UNTAGGED = 0
 
 
-def part_code(name: str) -> int:
-    """Integer code of a boundary part name (``clamped`` -> 1, ...)."""
+def part_code(name: str, names: Sequence[str] = PARTS) -> int:
+    """Integer code of a boundary part name among ``names`` (``clamped`` -> 1, ...)."""
     try:
-        return PARTS.index(name) + 1
+        return list(names).index(name) + 1
     except ValueError:
         raise ValueError(
-            f"unknown boundary part {name!r}; the parts are {', '.join(PARTS)}"
+            f"unknown boundary part {name!r}; the parts are {', '.join(names)}"
         ) from None
+
+
+def part_names_with(names: Sequence[str], more: Sequence[str]) -> tuple[str, ...]:
+    """``names`` followed by the names of ``more`` not among them, in order."""
+    out = list(names)
+    out += [n for n in dict.fromkeys(more) if n not in out]
+    return tuple(out)
 
 
 class MeshError(ValueError):
@@ -52,14 +61,17 @@ class Mesh:
     cell_vertices : int array
         Concatenated counter-clockwise vertex lists of the cells.
     boundary_tags : (n_boundary_edges,) int array, optional
-        Part code (see :data:`PARTS`) of every boundary edge, in the order of
-        :attr:`boundary_edges`; 0 marks an untagged edge.
+        Part code of every boundary edge, in the order of :attr:`boundary_edges`: code
+        ``i`` is the part ``part_names[i - 1]``; 0 marks an untagged edge.
+    part_names : tuple of str
+        Names of the part codes 1, 2, ...; the paper's three parts first by default.
     """
 
     points: NDArray[np.float64]
     cell_offsets: NDArray[np.int64]
     cell_vertices: NDArray[np.int64]
     boundary_tags: NDArray[np.int8] | None = field(default=None)
+    part_names: tuple[str, ...] = PARTS
 
     def __post_init__(self) -> None:
         pts = np.ascontiguousarray(self.points, dtype=np.float64)
@@ -95,8 +107,12 @@ class Mesh:
         tags = np.ascontiguousarray(tags, dtype=np.int8)
         if tags.shape != (nb,):
             raise MeshError(f"boundary_tags must have shape ({nb},), got {tags.shape}")
-        if np.any((tags < 0) | (tags > len(PARTS))):
-            raise MeshError(f"boundary_tags must be codes 0..{len(PARTS)}")
+        names = tuple(str(n) for n in self.part_names)
+        if len(set(names)) != len(names) or len(names) > 127:
+            raise MeshError(f"part_names must be at most 127 distinct names, got {names}")
+        if np.any((tags < 0) | (tags > len(names))):
+            raise MeshError(f"boundary_tags must be codes 0..{len(names)}")
+        object.__setattr__(self, "part_names", names)
         tags.setflags(write=False)
         object.__setattr__(self, "boundary_tags", tags)
 
@@ -107,6 +123,7 @@ class Mesh:
         points: ArrayLike,
         cells: Sequence[Sequence[int]] | NDArray[np.int64],
         boundary_tags: ArrayLike | None = None,
+        part_names: Sequence[str] = PARTS,
     ) -> Mesh:
         """Build a mesh from a list of vertex-index lists (or an (n_cells, n) array)."""
         if isinstance(cells, np.ndarray) and cells.ndim == 2:
@@ -121,7 +138,7 @@ class Mesh:
             )
         offsets = np.concatenate([[0], np.cumsum(sizes)])
         tags = None if boundary_tags is None else np.asarray(boundary_tags)
-        return cls(np.asarray(points, dtype=float), offsets, flat, tags)
+        return cls(np.asarray(points, dtype=float), offsets, flat, tags, tuple(part_names))
 
     # ------------------------------------------------------------------ sizes
     @property
@@ -209,9 +226,36 @@ class Mesh:
         return n / np.linalg.norm(n, axis=1)[:, None]
 
     # ------------------------------------------------------------------ parts
+    def part_code(self, name: str) -> int:
+        """The code of a part of this mesh (ValueError naming the parts if unknown)."""
+        return part_code(name, self.part_names)
+
+    @property
+    def parts(self) -> tuple[str, ...]:
+        """Names of the parts that have boundary edges, in code order."""
+        present = set(np.unique(np.asarray(self.boundary_tags)).tolist())
+        return tuple(n for i, n in enumerate(self.part_names) if i + 1 in present)
+
+    def part_counts(self) -> dict[str, int]:
+        """Boundary edges of every named part (the paper's three always listed)."""
+        tags = np.asarray(self.boundary_tags)
+        return {p: int(np.sum(tags == i + 1)) for i, p in enumerate(self.part_names)}
+
+    def has_part(self, name: str) -> bool:
+        """Whether the part exists and has boundary edges."""
+        return name in self.parts
+
     def part_edges(self, name: str) -> NDArray[np.int64]:
-        """Boundary edges of one part, oriented as in their cell."""
-        return self.boundary_edges[self.boundary_tags == part_code(name)]
+        """Boundary edges of one part, oriented as in their cell (none for a part name
+        this mesh does not know among the paper's three)."""
+        if name not in self.part_names and name in PARTS:
+            return np.zeros((0, 2), dtype=np.int64)
+        return self.boundary_edges[self.boundary_tags == self.part_code(name)]
+
+    def with_tags(self, tags: ArrayLike, part_names: Sequence[str] | None = None) -> Mesh:
+        """The same cells with other boundary tags (and part names)."""
+        names = self.part_names if part_names is None else tuple(part_names)
+        return Mesh(self.points, self.cell_offsets, self.cell_vertices, np.asarray(tags), names)
 
     def part_vertices(self, name: str) -> NDArray[np.int64]:
         """Sorted ids of the vertices on the closure of a part."""
@@ -241,6 +285,7 @@ class Mesh:
             A new mesh with the same cells and updated ``boundary_tags``.
         """
         tags = np.array(self.boundary_tags, dtype=np.int8, copy=True)
+        names = part_names_with(self.part_names, list(parts))
         if overwrite:
             tags[:] = UNTAGGED
         # with overwrite=False only the edges untagged on entry may be (re)tagged, so
@@ -249,7 +294,7 @@ class Mesh:
         mid = self.edge_midpoints(self.boundary_edges)
         rest: list[str] = []
         for name, pred in parts.items():
-            code = part_code(name)
+            code = part_code(name, names)
             if isinstance(pred, str):
                 if pred != "rest":
                     raise ValueError(f"boundary part {name!r}: unknown selector {pred!r}")
@@ -262,8 +307,8 @@ class Mesh:
                 )
             tags[hit & ~protected] = code
         for name in rest:
-            tags[tags == UNTAGGED] = part_code(name)
-        return Mesh(self.points, self.cell_offsets, self.cell_vertices, tags)
+            tags[tags == UNTAGGED] = part_code(name, names)
+        return Mesh(self.points, self.cell_offsets, self.cell_vertices, tags, names)
 
     # ------------------------------------------------------------------ geometry
     @cached_property
@@ -296,7 +341,7 @@ class Mesh:
 
     def __repr__(self) -> str:
         counts = {n: len(ids) for n, (ids, _) in self.groups.items()}
-        tagged = {p: int(np.sum(self.boundary_tags == part_code(p))) for p in PARTS}
+        tagged = self.part_counts()
         return (
             f"Mesh({self.n_points} vertices, {self.n_cells} cells by vertex count {counts}, "
             f"boundary edges {tagged}, untagged {int(np.sum(self.boundary_tags == 0))})"

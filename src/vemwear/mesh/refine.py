@@ -28,7 +28,7 @@ from typing import Literal, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .polymesh import Mesh, MeshError, part_code
+from .polymesh import Mesh, MeshError
 from .quality import _kernel_disk_group
 
 __all__ = ["refine_along", "refine_cells", "refine_where"]
@@ -253,7 +253,7 @@ def _carry_tags(
     i = np.clip(np.searchsorted(okey, key), 0, len(okey) - 1)
     found = okey[i] == key
     tags = np.where(found, otag[i], 0).astype(np.int8)
-    return Mesh(new.points, new.cell_offsets, new.cell_vertices, tags)
+    return Mesh(new.points, new.cell_offsets, new.cell_vertices, tags, old.part_names)
 
 
 def refine_along(
@@ -279,7 +279,7 @@ def refine_along(
     -------
     Mesh
     """
-    code = part_code(part)
+    code = mesh.part_code(part)
     if touching not in ("edge", "vertex"):
         raise ValueError(f"touching must be 'edge' or 'vertex', got {touching!r}")
     if not np.any(mesh.boundary_tags == code):

@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .checks import check_boundary, check_cells, check_conforming, check_vertices
-from .polymesh import PARTS, Mesh, MeshError, part_code
+from .polymesh import Mesh, MeshError
 from .quality import hanging_nodes, quality_report
 
 __all__ = ["contact_nodes", "mesh_summary"]
@@ -68,7 +68,7 @@ def mesh_summary(mesh: Mesh, *, quality: bool = True) -> dict[str, Any]:
         "h": float(mesh.h),
         "area": float(np.sum(mesh.cell_areas)),
         "boundary_edges": {
-            **{p: int(np.sum(tags == part_code(p))) for p in PARTS},
+            **mesh.part_counts(),
             "untagged": int(np.sum(tags == 0)),
         },
         "contact_nodes": len(contact_nodes(mesh)),

@@ -71,14 +71,14 @@ def smallness_report(problem: Problem, max_dofs: int = 200_000) -> tuple[str, st
 
 def check_rows(cfg: Config) -> Rows:
     """The description of a validated configuration that ``vemwear check`` prints."""
-    from ..mesh import PARTS, part_code
+    from ..mesh import PARTS
     from ..solvers import resolve_backend
 
     pr = cfg.problem
     m = pr.mesh
     cb = pr.contact
     counts = ", ".join(f"{n}-gons: {len(i)}" for n, (i, _) in sorted(m.groups.items()))
-    parts = ", ".join(f"{p} {int(np.sum(m.boundary_tags == part_code(p)))}" for p in PARTS)
+    parts = ", ".join(f"{p} {n}" for p, n in m.part_counts().items() if n or p in PARTS)
     k = pr.time.k
     src = cfg.mesh_source
     mesh_from = (
