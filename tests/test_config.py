@@ -253,7 +253,6 @@ ERRORS = [
     ("contact", _DELETE, "missing required section [contact]"),
     ("boundary", _DELETE, "missing required section [boundary]"),
     ("contact.v_star", _DELETE, "[contact] missing required key 'v_star'"),
-    ("contact.v_star", [0.0, 0.0], "[contact] v_star = [0.0, 0.0] vanishes at t = 0 (level 0)"),
     ("contact.v_star", [1.0], "[contact] v_star must have at least 2 entries, got 1 ([1.0])"),
     ("contact.v_star", {"t": [0, 1], "values": [[1, 0]]}, "[contact] v_star: 't' and 'values'"),
     (
@@ -315,8 +314,8 @@ ERRORS = [
     (
         "boundary.contact",
         "bottm",
-        "[boundary] contact must be one of 'left', 'right', "
-        "'bottom', 'top', 'rest', got 'bottm'; did you mean 'bottom'?",
+        "[boundary] contact = 'bottm' is neither a side (left, right, bottom, top), 'rest' "
+        "nor a part of the mesh; did you mean 'bottom'?",
     ),
     ("boundary.contact", [{"from": [0, 0]}], "[boundary] contact[0] missing required key 'to'"),
     ("boundary.contact", 3, "[boundary] contact must be a side ('left', 'right', 'bottom'"),
@@ -387,12 +386,10 @@ def test_file_errors(tmp_path: Path) -> None:
 
 
 def test_problem_errors_keep_the_file_name() -> None:
-    d = base()  # v* vanishes at t = 0.5: only the Problem sees it
-    d["contact"]["v_star"] = {"t": [0.0, 0.5, 1.0], "values": [[1.0, 0.0], [0.0, 0.0], [1.0, 0.0]]}
+    d = base()  # g < 0 near x = 2: only the Problem sees it, at the contact nodes
+    d["contact"]["g"] = {"along": "x", "at": [0.0, 2.0], "values": [0.1, -0.1]}
     with pytest.raises(
-        ConfigError,
-        match=r"^config.toml: \[contact\] v_star vanishes at "
-        r"t = 0.5 \(level 4\)",
+        ConfigError, match=r"^config.toml: \[contact\] g = .* must be > 0 on the contact part"
     ):
         parse(d)
 

@@ -140,12 +140,16 @@ def test_edge_load_equals_p1_facet_load(tri_mesh):
 class P1Reference:
     """Independent P1 contact-and-wear solver on the paper's rectangle (design.md 3-4).
 
-    Residual of the step problem, with n*(t) = -v*(t)/|v*(t)| (paper 2.2) and the
+    Residual of the step problem, with the friction direction from the tangential part
+    of the foundation velocity, n*_a(t) = -v*_tau(a)/|v*_tau(a)| with
+    v*_tau(a) = v* - (v* . nu_a) nu_a (paper 2.2 written for any Gamma_C), and the
     friction law -sigma_tau = mu p(u_nu - w) n*, so that the contact work is
-    sum_a omega_a [(p_a + lam_a) v_nu(a) + mu p_a n* . v_tau(a)]:
+    sum_a omega_a [(p_a + lam_a) v_nu(a) + mu p_a n*_a . v_tau(a)]:
 
-        K u - F + sum_a omega_a [(p_a + lam_a) nu_a + mu p_a (n* - (n* . nu_a) nu_a)] = 0,
-        p_a = c (u_nu(a) - w_a)_+,  lam_a >= 0,  u_nu(a) <= g,  lam_a (u_nu(a) - g) = 0.
+        K u - F + sum_a omega_a [(p_a + lam_a) nu_a + mu p_a n*_a] = 0,
+        p_a = c (u_nu(a) - w_a)_+,  lam_a >= 0,  u_nu(a) <= g,  lam_a (u_nu(a) - g) = 0,
+
+    and the wear rate alpha_a = kappa |v*_tau(a)|.
 
     ``friction_sign=+1`` flips n* (only to show that the comparison can tell).
     """
@@ -184,13 +188,17 @@ class P1Reference:
         self.states = np.array(list(itertools.product(range(3), repeat=m)))
         self.nv = nv
 
+    def tangential(self, vs):
+        """v*_tau at every contact node, (m, 2)."""
+        return vs[None, :] - (self.nu @ vs)[:, None] * self.nu
+
     def step(self, w, n_star):
         """All 3^m contact states solved at once; returns the unique admissible one."""
         m, S = self.m, self.states
         nu, om = self.nu, self.omega
         on = S >= 1  # soft layer compressed: p = c (u_nu - w)
         rigid = S == 2  # u_nu = g, lam >= 0
-        tstar = n_star - (nu @ n_star)[:, None] * nu  # tangential part of n* per node
+        tstar = n_star  # (m, 2): the friction direction at every node, tangential
         dirn = nu + MU * tstar  # nodal force per unit soft-layer pressure, (m, 2)
         # nodal force at node j: f_j = om_j [on_j c (y_nu_j - w_j) dirn_j + lam_j nu_j];
         # contact displacements y = y0 - H f, so with the normal components
@@ -241,12 +249,13 @@ class P1Reference:
         W, Y, LAM_, P_, ST = (np.zeros((L, self.m)) for _ in range(5))
         w = np.zeros(self.m)
         for n in range(L):
-            vs = np.asarray(v_star(t[n]), float)
-            n_star = self.sign * vs / np.linalg.norm(vs)
+            vt = self.tangential(np.asarray(v_star(t[n]), float))
+            speed = np.linalg.norm(vt, axis=1)
+            n_star = self.sign * vt / speed[:, None]
             U[n], Y[n], LAM_[n], P_[n], ST[n] = self.step(w, n_star)
             W[n] = w
-            if n + 1 < L:  # left rectangle rule (3.22), alpha(t_n) = kappa |v*(t_n)|
-                w = w + (t[n + 1] - t[n]) * KAPPA * np.linalg.norm(vs) * P_[n]
+            if n + 1 < L:  # left rectangle rule (3.22), alpha(t_n) = kappa |v*_tau(t_n)|
+                w = w + (t[n + 1] - t[n]) * KAPPA * speed * P_[n]
         return {
             "u": U,
             "wear": W,
@@ -263,7 +272,8 @@ def v_star_paper(t):
 
 
 def v_star_varying(t):
-    """Speed varies and the tangential direction reverses at t = 2/3 (v* never vanishes)."""
+    """Speed varies, v* has a normal part, and the tangential direction reverses at
+    t = 2/3 (the tangential part never vanishes on the grid)."""
     return np.array([1.0 - 1.5 * t, 0.5])
 
 

@@ -325,7 +325,7 @@ def _solver_options(base: SolverOptions, method: str | None) -> SolverOptions:
 def cmd_run(args: argparse.Namespace) -> int:
     """``vemwear run CONFIG -o OUTDIR [--resume]``: validate, solve, write, summarize."""
     from ..config import load_config
-    from ..runner import execute_run, prepare_run, result_rows, smallness_report
+    from ..runner import abandon_run, execute_run, prepare_run, result_rows, smallness_report
     from ..runner.outdir import stale_temporaries
     from ..runner.plan import admit_sizes, estimate_config
 
@@ -350,7 +350,11 @@ def cmd_run(args: argparse.Namespace) -> int:
         solver_flag=args.solver,
         need_bytes=0 if args.force_size else int(est.disk),
     )
-    _, warning = smallness_report(cfg.problem)
+    try:  # assembles the stiffness: may fail before any level, like the run
+        _, warning = smallness_report(cfg.problem)
+    except BaseException:
+        abandon_run(plan)
+        raise
     for w in [warning, *_overshoot(cfg)]:
         if w:
             say(f"{PROG}: warning: {w}")

@@ -21,15 +21,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..contact import LinearCompliance, TableCompliance
 from ..mesh import Mesh, MeshError, read_mesh, select_parts
 from ..mesh.registry import family
 from ..simulate import Problem, SolverOptions, TimeGrid
 from ..solvers import resolve_backend
-from ..vem import Material, body_force_vector, traction_vector
+from ..vem import Material, body_force_vector, edge_load_vector
 from . import schema as s
 from .errors import ConfigError, at, from_library, from_validation
 from .expr import Expression
+from .parts import Roles, contact_law, contact_parts, roles
 
 __all__ = ["Config", "OutputOptions", "Sizes", "load_config", "parse_config"]
 
@@ -277,15 +277,78 @@ def _u_levels(
     return np.union1d(grid.index(store) if store else [], [L - 1]).astype(np.int64)
 
 
+def _problem(
+    src: str,
+    c: s.ConfigFile,
+    raw: Mapping[str, Any],
+    parts: Roles,
+    mesh: Mesh,
+    material: Material,
+    grid: TimeGrid,
+    where: str,
+) -> Problem:
+    """The :class:`Problem` of the roles; its errors at their keys."""
+    loads = raw.get("loads", {})
+    f2: Any = _data(c.loads.f2, FieldExpression, loads.get("f2"))
+    if parts.tractions:
+        f2 = {n: _data(v, FieldExpression, rv) for n, (v, rv) in parts.tractions.items()}
+    name, ct, rt, _ = parts.contacts[0]
+    single = len(parts.contacts) == 1 and name == "contact"
+    try:
+        if single:
+            with at(src, "[contact]", rt, key="p"):
+                law = contact_law(ct.p)
+            top = {
+                "p": law,
+                "g": _data(ct.g, None, None),
+                "mu": _data(ct.mu, None, None),
+                "kappa": _data(ct.kappa, None, None),
+                "v_star": _data(ct.v_star, VelocityExpression, rt["v_star"]),
+                "gap": _data(ct.gap, None, None),
+            }
+            contacts: tuple[Any, ...] = ()
+        else:
+            top, contacts = {}, contact_parts(src, parts, _data, VelocityExpression)
+        return Problem(
+            mesh=mesh,
+            material=material,
+            time=grid,
+            f1=_data(c.loads.f1, FieldExpression, loads.get("f1")),
+            f2=f2,
+            stabilization=c.vem.stabilization,
+            clamped=parts.clamped,
+            displacement=tuple(parts.displacement),
+            contacts=contacts,
+            **top,
+        )
+    except ConfigError:
+        raise
+    except MeshError as exc:  # the boundary parts (the rest of the mesh is checked)
+        hint = (
+            "; tag the parts in the file (line cells with cell data 'part', or gmsh physical "
+            "groups) or say in a [boundary] section what each part is"
+        )
+        raise ConfigError(f"{src}: {where} {exc}{hint if where != '[boundary]' else ''}") from None
+    except ValueError as exc:
+        section = "[contact]" if single else "[[contact]]"
+        raise from_library(exc, src, section, rt if single else {}) from None
+
+
 def _check_loads(src: str, pr: Problem) -> None:
     """Loads given by expressions give finite load vectors at every time level."""
-    for name, assemble in (("f1", body_force_vector), ("f2", traction_vector)):
-        f = getattr(pr, name)
+    fields: list[tuple[str, Any, NDArray[np.int64] | None]] = [("f1", pr.f1, None)]
+    fields += [("f2", f, pr.mesh.part_edges(n)) for n, f in pr.tractions.items()]
+    for name, f, edges in fields:
         if not isinstance(f, FieldExpression):
             continue
         with np.errstate(all="ignore"):
             for n in range(len(pr.time.t)) if f.uses_t else range(1):
-                F = assemble(pr.mesh, f, float(pr.time.t[n])).reshape(-1, 2)
+                t = float(pr.time.t[n])
+                F = (
+                    body_force_vector(pr.mesh, f, t)
+                    if edges is None
+                    else edge_load_vector(pr.mesh, edges, f, t)
+                ).reshape(-1, 2)
                 bad = np.flatnonzero(~np.all(np.isfinite(F), axis=1))
                 if bad.size:
                     v = int(bad[0])
@@ -375,16 +438,9 @@ def parse_config(
     if admit is not None:
         admit(_sizes(src, c, Path(base_dir)))
     raw: dict[str, Any] = copy.deepcopy(dict(data))  # valid, so plain TOML types only
-    con = raw["contact"]
     with at(src, "[material]"):
         material = Material(c.material.lam, c.material.eta)
-    with at(src, "[contact]", key="p"):
-        law = c.contact.p
-        p = (
-            LinearCompliance(law.c)
-            if isinstance(law, s.LinearLaw)
-            else TableCompliance(tuple(law.r), tuple(law.p))
-        )
+    parts = roles(src, c, raw)
     grid = _time(src, c.time, raw["time"])
     times = _output_times(src, c.output.times, grid)
     output = OutputOptions(
@@ -402,35 +458,13 @@ def parse_config(
         resolve_backend(sol.backend)
 
     mesh, mesh_source = _mesh(src, c.mesh, raw["mesh"], Path(base_dir))
-    if isinstance(c.boundary, s.Boundary):
-        with at(src, "[boundary]", raw["boundary"]):
-            mesh = select_parts(mesh, {k: getattr(c.boundary, k) for k in raw["boundary"]})
+    if parts.selectors:
+        with at(src, "[boundary]", raw.get("boundary", {})):
+            mesh = select_parts(mesh, parts.selectors)
         where = "[boundary]"
     else:
         where = f"[mesh] file {c.mesh.file!r}:"
-    loads = raw.get("loads", {})
-    try:
-        problem = Problem(
-            mesh=mesh,
-            material=material,
-            time=grid,
-            f1=_data(c.loads.f1, FieldExpression, loads.get("f1")),
-            f2=_data(c.loads.f2, FieldExpression, loads.get("f2")),
-            p=p,
-            g=_data(c.contact.g, None, None),
-            mu=_data(c.contact.mu, None, None),
-            kappa=_data(c.contact.kappa, None, None),
-            v_star=_data(c.contact.v_star, VelocityExpression, con["v_star"]),
-            stabilization=c.vem.stabilization,
-        )
-    except MeshError as exc:  # the boundary parts (the rest of the mesh is checked)
-        hint = (
-            " in the file (line cells with cell data 'part' = 1, 2, 3, or Gmsh physical groups "
-            "of these names), or add a [boundary] section"
-        )
-        raise ConfigError(f"{src}: {where} {exc}{hint if where != '[boundary]' else ''}") from None
-    except ValueError as exc:
-        raise from_library(exc, src, "[contact]", con) from None
+    problem = _problem(src, c, raw, parts, mesh, material, grid, where)
     _check_loads(src, problem)
     title = c.title if c.title is not None else Path(source).stem
     return Config(path, raw, title, problem, solver, output, mesh_source, c)

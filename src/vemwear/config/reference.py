@@ -105,6 +105,8 @@ def reference_tables() -> dict[str, str]:
         "contact.table": _table(head, _rows(s.CoefficientTable)),
         "contact.v_star": _table(head, _rows(s.VelocityTable)),
         "time": _table(head, list(time.values())),
+        "boundary.displacement": _table(head, _rows(s.DisplacementPart)),
+        "boundary.traction": _table(head, _rows(s.TractionPart)),
     }
     for name in ("boundary", "material", "vem", "loads", "contact", "solver", "output"):
         tables[name] = _table(head, _rows(getattr(s, name.title())))

@@ -129,6 +129,29 @@ def _words(tp: Any) -> str:
 Vector: TypeAlias = Annotated[list[float], Field(min_length=2, max_length=2)]
 
 
+# ---------------------------------------------------------------------------- boundary
+class Segment(Section):
+    """The boundary edges lying on a segment (validated into the pair of its ends)."""
+
+    model_config = ConfigDict(title="segment { from, to }")
+    start: Vector = Field(alias="from", description="one end [x, y]")
+    to: Vector = Field(description="the other end [x, y]")
+
+
+_SIDES = f"a side ({', '.join(map(repr, SIDES))})"
+Ends: TypeAlias = Annotated[Segment, AfterValidator(lambda g: (tuple(g.start), tuple(g.to)))]
+Piece: TypeAlias = by_kind(  # type: ignore[valid-type]
+    f"{_SIDES}, a part of the mesh file or a segment {{ from, to }}", string=str, table=Ends
+)
+Selector: TypeAlias = by_kind(  # type: ignore[valid-type]
+    f"{_SIDES}, 'rest', a segment {{ from = [x, y], to = [x, y] }}, the name of a part of "
+    "the mesh file, or an array of these",
+    string=str,
+    table=Ends,
+    array=Annotated[list[Piece], Field(min_length=1)],  # type: ignore[valid-type]
+)
+
+
 # ---------------------------------------------------------------------------- contact
 class CoefficientTable(Section):
     """Piecewise linear along Gamma_C, constant beyond the ends."""
@@ -217,16 +240,36 @@ VStar: TypeAlias = by_kind(  # type: ignore[valid-type]
     table=VelocityTable,
 )
 Load: TypeAlias = components("x", "y", "t")  # type: ignore[valid-type]
+DispComponent: TypeAlias = by_kind(  # type: ignore[valid-type]
+    "a number or an expression string in x, y, t",
+    number=float,
+    string=expression("x", "y", "t"),
+)
 
 
 class Contact(Section):
-    """The contact part Gamma_C: the soft layer and the foundation. All keys are required."""
+    """A contact part of Gamma_C: the soft layer and the foundation. ``[contact]`` is one
+    part (where: ``[boundary] contact`` or ``on``); ``[[contact]]`` tables are several
+    parts, each with its own ``on``."""
 
+    name: str | None = Field(
+        None, description="name of the part (default: contact, or contact1, contact2, ...)"
+    )
+    on: Selector | None = Field(
+        None, title="selector", description="where (default: [boundary] contact)"
+    )
     p: Law = Field(description="normal compliance law of the soft layer, see below")
-    g: Coefficient = Field(description="thickness of the soft layer, > 0 (u_nu <= g)")
+    g: Coefficient = Field(description="thickness of the soft layer, > 0 (u_nu - gap <= g)")
     mu: Coefficient = Field(description="friction coefficient, >= 0")
-    kappa: Coefficient = Field(description="wear coefficient, >= 0 (wear rate kappa |v*| p)")
-    v_star: VStar = Field(description="velocity of the foundation, non-zero at every level")
+    kappa: Coefficient = Field(
+        description="wear coefficient, >= 0 (wear rate kappa |v*_tau| p, v*_tau the part of "
+        "v* along the boundary)"
+    )
+    v_star: VStar = Field(description="velocity of the foundation; it may vanish at times")
+    gap: Coefficient = Field(
+        0.0,
+        description="initial gap between the body and the layer, >= 0 (penetration u_nu - gap - w)",
+    )
 
 
 class Loads(Section):
@@ -373,34 +416,64 @@ class Output(Section):
     )
 
 
-# ---------------------------------------------------------------------------- boundary
-class Segment(Section):
-    """The boundary edges lying on a segment (validated into the pair of its ends)."""
+class DisplacementPart(Section):
+    """Prescribed displacement components on a part; an omitted component is free."""
 
-    model_config = ConfigDict(title="segment { from, to }")
-    start: Vector = Field(alias="from", description="one end [x, y]")
-    to: Vector = Field(description="the other end [x, y]")
+    name: str | None = Field(
+        None, description="name of the part (default: displacement1, displacement2, ...)"
+    )
+    on: Selector = Field(title="selector", description="where")
+    ux: DispComponent | None = Field(None, description="prescribed u_x")
+    uy: DispComponent | None = Field(None, description="prescribed u_y")
 
 
-_SIDES = f"a side ({', '.join(map(repr, SIDES))})"
-Ends: TypeAlias = Annotated[Segment, AfterValidator(lambda g: (tuple(g.start), tuple(g.to)))]
-Piece: TypeAlias = by_kind(  # type: ignore[valid-type]
-    f"{_SIDES} or a segment {{ from, to }}", string=Literal[SIDES], table=Ends
-)
-Selector: TypeAlias = by_kind(  # type: ignore[valid-type]
-    f"{_SIDES}, 'rest', a segment {{ from = [x, y], to = [x, y] }} or an array of these",
-    string=Literal[(*SIDES, "rest")],
-    table=Ends,
-    array=Annotated[list[Piece], Field(min_length=1)],  # type: ignore[valid-type]
+class TractionPart(Section):
+    """A traction part with its own load."""
+
+    name: str | None = Field(
+        None, description="name of the part (default: traction1, traction2, ...)"
+    )
+    on: Selector = Field(title="selector", description="where")
+    f2: Load = Field(description="traction [f2x, f2y] on this part")
+
+
+def _traction_form(v: Any) -> str | None:
+    if isinstance(v, list) and v and all(isinstance(x, dict) and "on" in x for x in v):
+        return "tables"
+    return "selector"
+
+
+Tractions: TypeAlias = choice(  # type: ignore[valid-type]
+    _traction_form,
+    lambda v: "is invalid",
+    selector=Selector,
+    tables=Annotated[list[TractionPart], Field(title="[[boundary.traction]] tables")],
 )
 
 
 class Boundary(Section):
-    """The boundary parts, selected by the midpoints of the boundary edges."""
+    """The boundary parts, selected by the midpoints of the boundary edges. Every
+    boundary edge belongs to exactly one part."""
 
-    clamped: Selector = Field(title="selector", description="Gamma_D, where u = 0")
-    traction: Selector | None = Field(None, title="selector", description="Gamma_N (traction f2)")
-    contact: Selector = Field(title="selector", description="Gamma_C")
+    clamped: Selector | None = Field(None, title="selector", description="Gamma_D, where u = 0")
+    traction: Tractions | None = Field(
+        None,
+        title="selector or tables",
+        description="Gamma_N with the traction [loads] f2, or [[boundary.traction]] tables "
+        "{ name, on, f2 }, each with its own traction",
+    )
+    contact: Selector | None = Field(
+        None, title="selector", description="Gamma_C of the [contact] section"
+    )
+    free: Selector | None = Field(
+        None, title="selector", description="traction-free parts (zero traction)"
+    )
+    displacement: list[DisplacementPart] | None = Field(
+        None,
+        title="tables",
+        description="[[boundary.displacement]] tables { name, on, ux, uy }: prescribed "
+        "displacement components",
+    )
 
 
 BoundaryForm: TypeAlias = by_kind(  # type: ignore[valid-type]
@@ -484,7 +557,11 @@ class ConfigFile(Section):
     material: Material
     vem: Vem = Vem.model_construct()
     loads: Loads = Loads.model_construct()
-    contact: Contact
+    contact: by_kind(  # type: ignore[valid-type]
+        "a table [contact] or [[contact]] tables",
+        table=Contact,
+        array=Annotated[list[Contact], Field(min_length=1)],
+    ) = Field(description="one contact part [contact], or several [[contact]] tables with 'on'")
     time: TimeForm = Field(description="exactly one of steps, dt, pattern, levels")
     solver: Solver = Solver.model_construct()
     output: Output = Output.model_construct()

@@ -10,17 +10,21 @@ from .law import (
     as_law,
     check_law,
 )
+from .parts import ContactPart, NodalLaw, tangential_velocity
 
 __all__ = [
     "CallableCompliance",
     "ComplianceLaw",
     "ContactBoundary",
+    "ContactPart",
     "FoundationVelocity",
     "LinearCompliance",
     "NodalField",
+    "NodalLaw",
     "TableCompliance",
     "as_law",
     "check_law",
     "contact_boundary",
     "nodal_values",
+    "tangential_velocity",
 ]

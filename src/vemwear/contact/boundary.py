@@ -1,15 +1,17 @@
 """The contact part Gamma_C: nodes, nodal quadrature weights, normals (docs/method.md, section 3).
 
-Contact nodes are the mesh vertices on the closure of Gamma_C that are not on the
-closure of Gamma_D. Node ``a`` has the weight ``omega_a`` (half the lengths of its
-contact edges), the unit outward normal ``nu_a`` (the edge normal; at a corner
-between two contact edges, their normalized average) and the unit tangent
-``tau_a = (-nu_y, nu_x)``. Nodes are ordered along the contact part.
+Contact nodes are the mesh vertices on the closure of Gamma_C that are not fixed (on
+the closure of Gamma_D, or with both components prescribed). Node ``a`` has the weight
+``omega_a`` (half the lengths of its contact edges), the unit outward normal ``nu_a``
+(the edge normal; at a corner between two contact edges, their normalized average) and
+the unit tangent ``tau_a = (-nu_y, nu_x)``. Gamma_C may have several parts: the nodes
+are ordered part by part, along the chains of each part's edges; a vertex shared by two
+contact parts belongs to the first (its weight and normal take the edges of both).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -30,6 +32,8 @@ class ContactBoundary:
     weights : (m,) omega_a
     normals, tangents : (m, 2) unit nu_a and tau_a
     n_dof : number of global dofs (2 * n_points)
+    part : (m,) index of the node's contact part in ``part_names``
+    part_names : the contact parts, in order
     """
 
     nodes: NDArray[np.int64]
@@ -39,6 +43,12 @@ class ContactBoundary:
     normals: NDArray[np.float64]
     tangents: NDArray[np.float64]
     n_dof: int
+    part: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    part_names: tuple[str, ...] = ("contact",)
+
+    def __post_init__(self) -> None:
+        if len(self.part) != len(self.nodes):
+            object.__setattr__(self, "part", np.zeros(len(self.nodes), dtype=np.int64))
 
     @property
     def m(self) -> int:
@@ -64,24 +74,11 @@ class ContactBoundary:
         return self.tangents @ np.asarray(n_star, dtype=float)
 
 
-def contact_boundary(mesh: Mesh) -> ContactBoundary:
-    """Build the contact data of a mesh whose contact part is tagged."""
-    edges = mesh.part_edges("contact")
-    if len(edges) == 0:
-        raise MeshError("the mesh has no 'contact' boundary edges")
-    P = mesh.points
-    d = P[edges[:, 1]] - P[edges[:, 0]]
-    length = np.linalg.norm(d, axis=1)
-    nrm = np.column_stack([d[:, 1], -d[:, 0]]) / length[:, None]
-    nv = mesh.n_points
-    weight = np.zeros(nv)
-    np.add.at(weight, edges[:, 0], 0.5 * length)
-    np.add.at(weight, edges[:, 1], 0.5 * length)
-    nsum = np.zeros((nv, 2))
-    np.add.at(nsum, edges[:, 0], nrm)
-    np.add.at(nsum, edges[:, 1], nrm)
-
-    # order the nodes along the chains of contact edges (boundary edges run counter-clockwise)
+def _chains(
+    edges: NDArray[np.int64], P: NDArray[np.float64], nv: int
+) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """Vertices of directed edges ordered along their chains, and the arc length from
+    the start of each chain (boundary edges run counter-clockwise)."""
     succ = -np.ones(nv, dtype=np.int64)
     succ[edges[:, 0]] = edges[:, 1]
     has_pred = np.zeros(nv, dtype=bool)
@@ -102,11 +99,55 @@ def contact_boundary(mesh: Mesh) -> ContactBoundary:
             if nxt >= 0:
                 s += float(np.linalg.norm(P[nxt] - P[v]))
             v = nxt
-    order = np.asarray(chain, dtype=np.int64)
-    clamped = np.zeros(nv, dtype=bool)
-    clamped[mesh.part_vertices("clamped")] = True
-    keep = ~clamped[order]
-    nodes, arc = order[keep], np.asarray(chain_s, dtype=float)[keep]
+    return np.asarray(chain, dtype=np.int64), np.asarray(chain_s, dtype=float)
+
+
+def contact_boundary(
+    mesh: Mesh,
+    parts: tuple[str, ...] = ("contact",),
+    fixed: NDArray[np.bool_] | None = None,
+) -> ContactBoundary:
+    """Build the contact data of the parts ``parts`` of a tagged mesh.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    parts : tuple of str
+        The contact parts, in order.
+    fixed : (n_points,) bool array, optional
+        Vertices that are no contact nodes (both components prescribed); by default
+        the vertices of the ``clamped`` part.
+    """
+    P = mesh.points
+    nv = mesh.n_points
+    per_part = [mesh.part_edges(name) for name in parts]
+    for name, edges in zip(parts, per_part, strict=True):
+        if len(edges) == 0:
+            raise MeshError(f"the mesh has no {name!r} boundary edges")
+    edges = np.concatenate(per_part)
+    d = P[edges[:, 1]] - P[edges[:, 0]]
+    length = np.linalg.norm(d, axis=1)
+    nrm = np.column_stack([d[:, 1], -d[:, 0]]) / length[:, None]
+    weight = np.zeros(nv)
+    np.add.at(weight, edges[:, 0], 0.5 * length)
+    np.add.at(weight, edges[:, 1], 0.5 * length)
+    nsum = np.zeros((nv, 2))
+    np.add.at(nsum, edges[:, 0], nrm)
+    np.add.at(nsum, edges[:, 1], nrm)
+    if fixed is None:
+        fixed = np.zeros(nv, dtype=bool)
+        if "clamped" in mesh.part_names:
+            fixed[mesh.part_vertices("clamped")] = True
+    taken = np.array(fixed, dtype=bool, copy=True)
+    nodes_l, arc_l, part_l = [], [], []
+    for i, pe in enumerate(per_part):
+        order, arc = _chains(pe, P, nv)
+        keep = ~taken[order]
+        taken[order] = True
+        nodes_l.append(order[keep])
+        arc_l.append(arc[keep])
+        part_l.append(np.full(int(keep.sum()), i, dtype=np.int64))
+    nodes, s = np.concatenate(nodes_l), np.concatenate(arc_l)
     if nodes.size == 0:
         raise MeshError("every contact vertex is also clamped: no contact node is left")
     normals = nsum[nodes] / np.linalg.norm(nsum[nodes], axis=1)[:, None]
@@ -114,9 +155,11 @@ def contact_boundary(mesh: Mesh) -> ContactBoundary:
     return ContactBoundary(
         nodes=nodes,
         points=P[nodes],
-        s=arc,
+        s=s,
         weights=weight[nodes],
         normals=normals,
         tangents=tangents,
         n_dof=2 * nv,
+        part=np.concatenate(part_l),
+        part_names=tuple(parts),
     )

@@ -71,11 +71,10 @@ class FoundationVelocity:
         return v
 
     def n_star(self, t: float) -> NDArray[np.float64]:
+        """``-v*/|v*|``, or zero where the foundation stands still."""
         v = self(t)
         nv = float(np.linalg.norm(v))
-        if nv == 0.0:
-            raise ValueError(f"v_star({t:g}) = 0: the foundation velocity must not vanish (H0(c))")
-        return -v / nv
+        return -v / nv if nv > 0.0 else np.zeros(2)
 
     def speed(self, t: float) -> float:
         return float(np.linalg.norm(self(t)))

@@ -60,8 +60,9 @@ def select_parts(mesh: Mesh, parts: Mapping[str, Any]) -> Mesh:
     parts : mapping
         ``{part: selector}``. A selector is a side of the bounding box (``"left"``,
         ``"right"``, ``"bottom"``, ``"top"``), a segment ``(a, b)`` (the boundary edges
-        lying on it), a list of these, or ``"rest"`` (the edges no other part selects;
-        one part at most). Edges are selected by their midpoints.
+        lying on it), the name of a part the mesh already has (a gmsh physical group),
+        a list of these, or ``"rest"`` (the edges no other part selects; one part at
+        most). Edges are selected by their midpoints.
 
     Returns
     -------
@@ -82,6 +83,9 @@ def select_parts(mesh: Mesh, parts: Mapping[str, Any]) -> Mesh:
             continue
         hit = np.zeros(len(edges), dtype=bool)
         for it in [spec] if isinstance(spec, str | tuple) else spec:
+            if isinstance(it, str) and it not in SIDES:
+                hit |= _named(mesh, name, it)
+                continue
             try:
                 pred = side_predicate(mesh, it) if isinstance(it, str) else segment_predicate(*it)
             except ValueError as exc:
@@ -111,6 +115,21 @@ def select_parts(mesh: Mesh, parts: Mapping[str, Any]) -> Mesh:
         raise ValueError(f"{rest[0]} selects no boundary edge: every edge is in another part")
     preds: dict[str, Any] = {n: (lambda m, h=h: h) for n, h in hits.items()}
     return mesh.with_boundary({**preds, **dict.fromkeys(rest, "rest")})
+
+
+def _named(mesh: Mesh, part: str, it: str) -> NDArray[np.bool_]:
+    """The boundary edges of the mesh's own part ``it`` (for the selector of ``part``)."""
+    import difflib
+
+    if it in mesh.parts:
+        return np.asarray(mesh.boundary_tags == mesh.part_code(it))
+    close = difflib.get_close_matches(it, [*SIDES, "rest", *mesh.parts], n=1, cutoff=0.6)
+    own = f"; the mesh's parts are {', '.join(mesh.parts)}" if mesh.parts else ""
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    raise ValueError(
+        f"{part} is neither a side ({', '.join(SIDES)}), 'rest' nor a part of the mesh"
+        f"{own}{hint}"
+    )
 
 
 def tag_rectangle(

@@ -255,7 +255,8 @@ def summarize(result: Result) -> dict[str, Any]:
     weights = np.asarray(result.problem.contact.weights)
     unorm = np.linalg.norm(result.u, axis=-1)  # (S, n)
     a = int(np.argmax(wear_T)) if wear_T.size else 0
-    active = np.asarray(result.problem.nodal["g"]) - np.asarray(result.u_nu[last])
+    nodal = result.problem.nodal
+    active = np.asarray(nodal["g"] + nodal["gap"]) - np.asarray(result.u_nu[last])
     g_scale = float(np.max(np.abs(result.problem.nodal["g"]), initial=1.0))
     outputs: dict[str, Any] = {
         "t_final": float(result.t[last]),

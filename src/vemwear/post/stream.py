@@ -98,6 +98,8 @@ class H5Sink:
         self.row, self.slot = plan.slots()
         self.on_checkpoint = on_checkpoint
         m = len(problem.contact.nodes)
+        gap = problem.nodal["gap"]
+        self.gap = gap if np.any(gap) else None
         K, S, nv = len(plan.levels), len(plan.u_levels), problem.mesh.n_points
         shapes: dict[str, tuple[tuple[int, ...], Any]] = {
             "wear": ((K, m), np.float64),
@@ -158,7 +160,9 @@ class H5Sink:
         i = self.buf_len
         b = self.buf
         b["wear"][i], b["u_nu"][i] = w, solution.u_nu
-        b["penetration"][i] = solution.u_nu - w
+        b["penetration"][i] = (
+            solution.u_nu - w if self.gap is None else solution.u_nu - self.gap - w
+        )
         b["lam"][i], b["p"][i] = solution.p_rigid, solution.p_soft
         b["iterations"][i] = solution.iterations
         res = solution.residuals

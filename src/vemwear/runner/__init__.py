@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from .describe import check_rows, result_rows, smallness_report
     from .outdir import OutputDirError, atomic_output_dir, check_output_dir
-    from .run import ResumeError, RunPlan, execute_run, prepare_run
+    from .run import ResumeError, RunPlan, abandon_run, execute_run, prepare_run
     from .signals import Terminated, signals_as_interrupts
 
 _WHERE = {
@@ -36,6 +36,7 @@ _WHERE = {
     "ResumeError": "run",
     "RunPlan": "run",
     "execute_run": "run",
+    "abandon_run": "run",
     "prepare_run": "run",
     "Terminated": "signals",
     "signals_as_interrupts": "signals",
@@ -45,6 +46,7 @@ __all__ = [
     "ResumeError",
     "RunPlan",
     "Terminated",
+    "abandon_run",
     "atomic_output_dir",
     "check_output_dir",
     "check_rows",

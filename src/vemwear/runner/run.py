@@ -58,6 +58,7 @@ __all__ = [
     "PARTIAL_NAME",
     "ResumeError",
     "RunPlan",
+    "abandon_run",
     "execute_run",
     "prepare_run",
     "storage_plan",
@@ -293,12 +294,16 @@ def _stop(plan: RunPlan, sink: Any, exc: BaseException) -> None:
     """Keep the finished levels of a stopped run; attach a one-line note to ``exc``."""
     state: LoopState | None = getattr(exc, "loop_state", None)
     c, L = (state.completed if state else 0), plan.storage.n_levels
+    if state is None or (c == 0 and plan.state is None):
+        try:  # nothing finished: remove what this run wrote, even if closing fails
+            sink.close()
+        except BaseException:
+            pass
+        finally:
+            _discard(plan)
+        return
     try:
         with saving(reraise=False):
-            if state is None or (c == 0 and plan.state is None):
-                sink.close()
-                _discard(plan)
-                return
             sink.checkpoint(state)
             sink.close()
             _write_partial(plan, c, _reason(exc))
@@ -312,6 +317,13 @@ def _stop(plan: RunPlan, sink: Any, exc: BaseException) -> None:
         exc.vemwear_note = note  # type: ignore[attr-defined]
     except AttributeError:  # pragma: no cover - exceptions with __slots__
         pass
+
+
+def abandon_run(plan: RunPlan) -> None:
+    """A prepared run that failed before its first level: remove what it wrote in its
+    output directory, and the directory if it made it (nothing else)."""
+    if plan.state is None:
+        _discard(plan)
 
 
 def _discard(plan: RunPlan) -> None:

@@ -1,7 +1,19 @@
 """The time loop of the fully discrete scheme and its inputs and outputs."""
 
+from ..contact.parts import ContactPart
+from .constraints import Prescribed
+from .discrete import Discretization
 from .loop import Result, SolverOptions, simulate
-from .problem import Discretization, Problem
+from .problem import Problem
 from .timegrid import TimeGrid
 
-__all__ = ["Discretization", "Problem", "Result", "SolverOptions", "TimeGrid", "simulate"]
+__all__ = [
+    "ContactPart",
+    "Discretization",
+    "Prescribed",
+    "Problem",
+    "Result",
+    "SolverOptions",
+    "TimeGrid",
+    "simulate",
+]

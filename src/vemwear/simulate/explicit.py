@@ -1,7 +1,7 @@
 """When the explicit wear rule (3.22) can overshoot.
 
 The left rectangle rule ``w^{n+1} = w^n + k_n alpha(t_n) p(u_nu^n - w^n)``, with
-``alpha = kappa |v*|``, is explicit in the wear: on a node pressed into the soft layer
+``alpha = kappa |v*_tau|``, is explicit in the wear: on a node pressed into the soft layer
 with a fixed ``u_nu``, the penetration ``r = u_nu - w`` evolves as
 ``r^{n+1} = r^n - k_n alpha p(r^n)``, which for a law of slope up to ``L_p`` overshoots
 (``r`` changes sign: more wear than the layer was penetrated) as soon as
@@ -22,20 +22,35 @@ __all__ = ["overshoot", "overshoot_warning"]
 
 
 def overshoot(problem: Problem) -> tuple[float, int, float]:
-    """``(max_n k_n max_a kappa_a |v*(t_n)| L_p, the level n, the largest safe step)``.
+    """``(max_n k_n max_a kappa_a |v*_tau(a, t_n)| L_p, the level n, the largest safe step)``.
 
-    The safe step is ``1 / max_n (max_a kappa_a |v*(t_n)| L_p)`` (inf if there is no wear).
+    The safe step is ``1 / max_n (max_a kappa_a |v*_tau(a, t_n)| L_p)`` (inf if there is
+    no wear); ``L_p`` is the Lipschitz constant of the node's compliance law.
     """
     t = problem.time.t
     if len(t) < 2:
         return 0.0, 0, float("inf")
-    kappa = float(np.max(problem.nodal["kappa"], initial=0.0))
-    L_p = float(getattr(problem.p, "lipschitz", 0.0))
-    if not np.isfinite(L_p):
+    from ..contact import tangential_velocity
+
+    kappa = problem.nodal["kappa"]
+    cb = problem.contact
+    L_p = np.array([float(getattr(pc.p, "lipschitz", 0.0)) for pc in problem.parts])[cb.part]
+    if not np.all(np.isfinite(L_p)):
         return 0.0, 0, float("inf")
-    v = problem.v_star
-    speed = np.array([v.speed(float(x)) for x in t[:-1]])  # type: ignore[union-attr]
-    rate = kappa * speed * L_p
+    # alpha L_p = kappa |v*_tau| L_p at every node; its largest value at every level
+    rate = np.array(
+        [
+            float(
+                np.max(
+                    kappa
+                    * np.abs(tangential_velocity(problem.parts, cb.part, cb.tangents, x))
+                    * L_p,
+                    initial=0.0,
+                )
+            )
+            for x in t[:-1]
+        ]
+    )
     value = np.diff(t) * rate
     n = int(np.argmax(value))
     top = float(rate.max())

@@ -121,7 +121,7 @@ def run_levels(
             full = kkt_residuals(sysm, st, X[:, j], so.p_rigid)
             check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)
             res = np.array([full[k] for k in RESIDUAL_NAMES])
-            sink.displacement(n_, d.full_displacement(X[:, j]), res)
+            sink.displacement(n_, d.full_displacement(X[:, j], st.t), res)
         pending.clear()
 
     def current() -> LoopState:
@@ -139,10 +139,10 @@ def run_levels(
             step = d.step_data(n, w)
             store_here = bool(slot[n] >= 0)
             sol = step_solver.solve(step, guess, recover=store_here and not batch)
-            sink.level(n, w, sol)
+            sink.level(n, w, d.physical(sol))
             if store_here:
                 if sol.u is not None:
-                    sink.displacement(n, d.full_displacement(sol.u), None)
+                    sink.displacement(n, d.full_displacement(sol.u, step.t), None)
                 else:
                     pending.append((n, w, step, sol))
             if callback is not None:

@@ -39,11 +39,11 @@ class Result:
     wear : (L, m) ndarray
         Wear w at the contact nodes.
     u_nu : (L, m) ndarray
-        Normal displacement at the contact nodes (``penetration = u_nu - wear``).
+        Normal displacement at the contact nodes (``penetration = u_nu - gap - wear``).
     p_rigid : (L, m) ndarray
-        Pressure of the rigid layer (the multiplier of u_nu <= g).
+        Pressure of the rigid layer (the multiplier of u_nu - gap <= g).
     p_soft : (L, m) ndarray
-        Pressure of the soft layer, p(u_nu - w).
+        Pressure of the soft layer, p(u_nu - gap - w).
     iterations : (L,) ndarray of int
         Solver iterations per level.
     residuals : (L, 3) ndarray
@@ -83,7 +83,8 @@ class Result:
 
     @property
     def penetration(self) -> NDArray[np.float64]:
-        return self.u_nu - self.wear
+        gap = self.problem.nodal["gap"]
+        return self.u_nu - self.wear if not np.any(gap) else self.u_nu - gap - self.wear
 
     def __post_init__(self) -> None:
         if self.completed < 0:

@@ -2,36 +2,43 @@
 
 The discrete choices the paper leaves open (nodal contact quadrature, normals at
 corners, the stabilization weight, the load) are those of docs/method.md, sections 1-4.
+The paper's setting (one clamped part Gamma_D, one traction part Gamma_N, one contact
+part Gamma_C) is the default; a problem may also have prescribed displacement
+components, several traction and contact parts, initial gaps and free parts.
 """
 
 from __future__ import annotations
 
-import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from ..contact import (
     ComplianceLaw,
     ContactBoundary,
+    ContactPart,
     FoundationVelocity,
     LinearCompliance,
     NodalField,
+    NodalLaw,
     check_law,
     contact_boundary,
     nodal_values,
 )
 from ..mesh.checks import check_mesh
-from ..mesh.polymesh import Mesh
-from ..solvers.system import ContactSystem, StepData
+from ..mesh.polymesh import Mesh, MeshError
 from ..util.hashing import sha256_arrays
-from ..vem import Material, body_force_vector, stiffness, traction_vector
+from ..vem import Material, body_force_vector, edge_load_vector
 from ..vem.assembly import Field
+from .constraints import Constraints, Prescribed
 from .timegrid import TimeGrid
+
+if TYPE_CHECKING:
+    from .discrete import Discretization
 
 
 class DataError(ValueError):
@@ -45,8 +52,8 @@ class Problem:
     Parameters
     ----------
     mesh : Mesh
-        With boundary parts ``clamped`` (Gamma_D, required), ``traction`` (Gamma_N)
-        and ``contact`` (Gamma_C, required).
+        With tagged boundary parts; the paper's are ``clamped`` (Gamma_D),
+        ``traction`` (Gamma_N) and ``contact`` (Gamma_C).
     material : Material
         Lamé coefficients lam, eta.
     time : TimeGrid
@@ -59,48 +66,118 @@ class Problem:
         Layer thickness (> 0), friction coefficient (>= 0), wear coefficient (>= 0)
         along Gamma_C.
     v_star : FoundationVelocity or 2-vector
-        Velocity of the foundation, never zero.
+        Velocity of the foundation; it may vanish at some times (no friction and no
+        wear there).
     stabilization : str
         ``"paper"`` (weight 1, the paper's dofi-dofi), ``"eta"`` or ``"trace"``.
+    gap : NodalField
+        Initial gap (>= 0) between the body and the layer along Gamma_C.
+    clamped : tuple of str
+        The parts with u = 0 (Gamma_D); ``"clamped"`` by default, skipped if the mesh
+        has no such part and other constraints hold the body.
+    displacement : tuple of Prescribed
+        Parts with prescribed displacement components.
+    contacts : tuple of ContactPart
+        Several contact parts with their own data; by default one part ``contact``
+        with ``p, g, mu, kappa, v_star, gap`` above.
+
+    ``f2`` may also be a mapping ``{part: traction}`` for several traction parts.
+    Every boundary edge belongs to one part; parts that are none of the above are
+    traction-free.
     """
 
     mesh: Mesh
     material: Material
     time: TimeGrid
     f1: Field = (0.0, 0.0)
-    f2: Field = (0.0, 0.0)
+    f2: Field | Mapping[str, Field] = (0.0, 0.0)
     p: ComplianceLaw = field(default_factory=lambda: LinearCompliance(0.4))
     g: NodalField = 0.1
     mu: NodalField = 0.0
     kappa: NodalField = 0.0
     v_star: FoundationVelocity | ArrayLike = (1.0, 0.0)
     stabilization: str = "paper"
+    gap: NodalField = 0.0
+    clamped: tuple[str, ...] = ("clamped",)
+    displacement: tuple[Prescribed, ...] = ()
+    contacts: tuple[ContactPart, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.v_star, FoundationVelocity):
             object.__setattr__(self, "v_star", FoundationVelocity(self.v_star))
-        v_star = cast(FoundationVelocity, self.v_star)
-        check_mesh(self.mesh, require=("clamped", "contact"))
-        scale = float(max(np.abs(self.nodal["g"]).max(), 1e-300))  # validates g, mu, kappa
-        check_law(self.p, scale=scale)
-        for level, t in enumerate(self.time.t):
-            if np.linalg.norm(v_star(t)) == 0.0:
-                raise ValueError(
-                    f"v_star vanishes at t = {t:g} (level {level}); H0(c) needs v* != 0"
-                )
+        object.__setattr__(self, "clamped", tuple(self.clamped))
+        object.__setattr__(self, "displacement", tuple(self.displacement))
+        object.__setattr__(self, "contacts", tuple(self.contacts))
+        check_mesh(self.mesh, require=())
+        named = [
+            *(c for c in self.clamped if c != "clamped" or c in self.mesh.part_names),
+            *(d.part for d in self.displacement),
+            *self.tractions,
+            *(c.part for c in self.parts),
+        ]
+        for name in named:
+            if not self.mesh.has_part(name):
+                raise MeshError(f"the mesh has no {name!r} boundary edges")
+        left = self.constraints.free_rigid_motions()
+        if left:
+            raise MeshError(
+                "the boundary conditions leave rigid motions free: "
+                + ", ".join(left)
+                + "; clamp a part or prescribe the displacement components that stop them"
+            )
+        nodal = self.nodal  # validates g, mu, kappa, gap
+        scale = float(max(np.abs(nodal["g"]).max(), 1e-300))
+        for pc in self.parts:
+            check_law(pc.p, scale=scale)
+
+    @cached_property
+    def parts(self) -> tuple[ContactPart, ...]:
+        """The contact parts with their data (one part ``contact`` by default)."""
+        if self.contacts:
+            return self.contacts
+        v = cast(FoundationVelocity, self.v_star)
+        return (ContactPart("contact", self.p, self.g, self.mu, self.kappa, v, self.gap),)
+
+    @cached_property
+    def tractions(self) -> dict[str, Field]:
+        """``{part: f2}``: the traction parts and their loads."""
+        if isinstance(self.f2, Mapping):
+            return dict(self.f2)
+        return {"traction": self.f2} if self.mesh.has_part("traction") else {}
+
+    @cached_property
+    def law(self) -> ComplianceLaw:
+        """The compliance law at the contact nodes (each part's own law)."""
+        if len(self.parts) == 1:
+            return self.parts[0].p
+        return NodalLaw(tuple(pc.p for pc in self.parts), self.contact.part)
+
+    @cached_property
+    def constraints(self) -> Constraints:
+        """The constrained dofs: clamped parts and prescribed components."""
+        return Constraints(self.mesh, self.clamped, self.displacement)
 
     @cached_property
     def contact(self) -> ContactBoundary:
-        """Nodes, weights and normals of Gamma_C."""
-        return contact_boundary(self.mesh)
+        """Nodes, weights and normals of Gamma_C (all contact parts)."""
+        return contact_boundary(
+            self.mesh,
+            tuple(pc.part for pc in self.parts),
+            self.constraints.fully_fixed_vertices,
+        )
 
     @cached_property
     def nodal(self) -> dict[str, NDArray[np.float64]]:
-        """g, mu and kappa at the contact nodes, checked for their signs."""
+        """g, mu, kappa and gap at the contact nodes, each from the node's part, checked
+        for their signs."""
         cb = self.contact
         out = {}
-        for name, rel in (("g", "> 0"), ("mu", ">= 0"), ("kappa", ">= 0")):
-            v = nodal_values(getattr(self, name), cb, name)
+        for name, rel in (("g", "> 0"), ("mu", ">= 0"), ("kappa", ">= 0"), ("gap", ">= 0")):
+            v = np.zeros(cb.m)
+            for i, pc in enumerate(self.parts):
+                sel = np.asarray(cb.part == i, dtype=bool)
+                if np.any(sel):
+                    v[sel] = nodal_values(getattr(pc, name), _subset(cb, sel), name)
             ok = v > 0 if name == "g" else v >= 0
             if not np.all(ok):
                 a = int(np.flatnonzero(~ok)[0])
@@ -114,6 +191,8 @@ class Problem:
     @cached_property
     def discrete(self) -> Discretization:
         """The assembled discrete problem (built on first use)."""
+        from .discrete import Discretization
+
         return Discretization(self)
 
     def describe(self) -> dict[str, Any]:
@@ -144,7 +223,28 @@ class Problem:
             "kappa": desc(self.kappa),
             "v_star": self.v_star.describe(),  # type: ignore[union-attr]
             "stabilization": self.stabilization,
+            "parts": list(m.part_names),
+            "clamped": list(self.clamped),
+            "displacement": [d.describe() for d in self.displacement],
+            "gap": desc(self.gap),
+            "contacts": [
+                {
+                    "part": c.part,
+                    "p": c.p.describe(),
+                    **{k: desc(getattr(c, k)) for k in ("g", "mu", "kappa", "gap")},
+                    "v_star": c.velocity.describe(),
+                }
+                for c in self.contacts
+            ],
         }
+
+    def external_load(self, t: float) -> NDArray[np.float64]:
+        """``<f_h(t), v>`` on all dofs: the body force by (3.3) and the traction of every
+        traction part by edge quadrature."""
+        F = body_force_vector(self.mesh, self.f1, t)
+        for name, f2 in self.tractions.items():
+            F = F + edge_load_vector(self.mesh, self.mesh.part_edges(name), f2, t)
+        return F
 
     def fingerprint(self) -> dict[str, Any]:
         """What determines the computed numbers: the physics and the discretization.
@@ -160,124 +260,35 @@ class Problem:
         m, t = self.mesh, self.time.t
         sample = np.unique(np.linspace(0, len(t) - 1, min(len(t), 65)).astype(np.int64))
 
-        def load(t: float) -> NDArray[np.float64]:  # without assembling the stiffness
-            return body_force_vector(m, self.f1, t) + traction_vector(m, self.f2, t)
-
         return {
             "format": "vemwear-problem/1",
             "vemwear_version": __version__,
             "description": self.describe(),
             "mesh": sha256_arrays(m.points, m.cell_offsets, m.cell_vertices, m.boundary_tags),
             "time": sha256_arrays(t),
-            "nodal": sha256_arrays(*(self.nodal[k] for k in ("g", "mu", "kappa"))),
-            "v_star": sha256_arrays(np.array([self.v_star(t[i]) for i in sample])),  # type: ignore[operator]
-            "load": sha256_arrays(load(float(t[0])), load(float(t[-1]))),
+            "nodal": sha256_arrays(*(self.nodal[k] for k in ("g", "mu", "kappa", "gap"))),
+            "v_star": sha256_arrays(
+                np.array([[pc.velocity(t[i]) for pc in self.parts] for i in sample])
+            ),
+            "load": sha256_arrays(
+                self.external_load(float(t[0])), self.external_load(float(t[-1]))
+            ),
+            "prescribed": sha256_arrays(
+                self.constraints.dofs,
+                self.constraints.values(float(t[0])),
+                self.constraints.values(float(t[-1])),
+            ),
         }
 
 
-class Discretization:
-    """Everything the time loop needs: K on free dofs, contact operators, nodal data."""
-
-    def __init__(self, problem: Problem) -> None:
-        mesh = problem.mesh
-        self.problem = problem
-        self.contact: ContactBoundary = problem.contact
-        cb = self.contact
-        self.g, self.mu, self.kappa = (problem.nodal[k] for k in ("g", "mu", "kappa"))
-        ndof = 2 * mesh.n_points
-        fixed = np.zeros(ndof, dtype=bool)
-        cl = mesh.part_vertices("clamped")
-        fixed[2 * cl] = fixed[2 * cl + 1] = True
-        self.free = np.flatnonzero(~fixed)
-        with np.errstate(all="ignore"):
-            self.K_full = stiffness(mesh, problem.material, problem.stabilization)
-        if not np.all(np.isfinite(self.K_full.data)):
-            mat = problem.material
-            raise DataError(
-                f"[material] lam = {mat.lam:g}, eta = {mat.eta:g} give a stiffness matrix with "
-                "non-finite entries (an overflow); use values of a sensible scale"
-            )
-        K = self.K_full[self.free][:, self.free].tocsr()
-        index = -np.ones(ndof, dtype=np.int64)
-        index[self.free] = np.arange(len(self.free))
-        cdofs = index[np.column_stack([2 * cb.nodes, 2 * cb.nodes + 1])]
-        self.system = ContactSystem(
-            K=K,
-            contact_dofs=cdofs,
-            normals=cb.normals,
-            tangents=cb.tangents,
-            weights=cb.weights,
-            g=self.g,
-            p=problem.p,
-            dof_points=mesh.points[self.free // 2],
-        )
-        self._constant_load = not (callable(problem.f1) or callable(problem.f2))
-        self._F0: NDArray | None = None
-
-    @property
-    def n_dof(self) -> int:
-        return 2 * self.problem.mesh.n_points
-
-    def load(self, t: float) -> NDArray[np.float64]:
-        """``f_h(t)`` on the free dofs (body force by 3.3, traction by edge quadrature)."""
-        if self._constant_load and self._F0 is not None:
-            return self._F0
-        pr = self.problem
-        with np.errstate(all="ignore"):
-            F = body_force_vector(pr.mesh, pr.f1, t) + traction_vector(pr.mesh, pr.f2, t)
-        F = F[self.free]
-        if not np.all(np.isfinite(F)):
-            raise DataError(
-                f"[loads] f1, f2 give a load vector with non-finite entries at t = {t:g} (an "
-                "overflow); use loads of a sensible scale"
-            )
-        if self._constant_load:
-            self._F0 = F
-        return F
-
-    def step_data(self, level: int, w: NDArray[np.float64]) -> StepData:
-        t = float(self.problem.time.t[level])
-        n_star = self.problem.v_star.n_star(t)  # type: ignore[union-attr]
-        fric = self.mu * self.contact.friction_direction(n_star)
-        return StepData(F=self.load(t), w=w, fric=fric, t=t, level=level)
-
-    def alpha(self, t: float) -> NDArray[np.float64]:
-        """``alpha(t) = kappa |v*(t)|`` at the contact nodes (2.2)."""
-        return self.kappa * self.problem.v_star.speed(t)  # type: ignore[union-attr]
-
-    def full_displacement(self, u_free: NDArray[np.float64]) -> NDArray[np.float64]:
-        """(n_points, 2) displacement with zeros on the clamped part."""
-        u = np.zeros(self.n_dof)
-        u[self.free] = u_free
-        return u.reshape(-1, 2)
-
-    def smallness_estimate(self) -> dict[str, float]:
-        """Estimate of the smallness condition of Theorem 3.4, ``c_0^2 L_p ||mu|| < C_1``.
-
-        ``C_1 / c_0^2`` is the smallest generalized eigenvalue of ``a_h(v, v)`` against
-        ``||v||^2_{L^2(Gamma_C)}`` (nodal quadrature) on the free dofs; the condition
-        reads ``L_p ||mu||_inf * (c_0^2 / C_1) < 1``.
-        """
-        import scipy.sparse.linalg as spla
-
-        s = self.system
-        Mc = (s.N.T @ sp.diags(s.weights) @ s.N + s.Tau.T @ sp.diags(s.weights) @ s.Tau).tocsc()
-        try:
-            vals = spla.eigsh(Mc, k=1, M=s.K.tocsc(), which="LA", return_eigenvectors=False)
-            ratio = float(vals[0])  # max of ||v||^2_Gc / a_h(v, v) = c_0^2 / C_1
-        except Exception:
-            return {"ratio": float("nan")}
-        Lp = float(self.problem.p.lipschitz)
-        value = Lp * float(np.abs(self.mu).max(initial=0)) * ratio
-        if np.isfinite(value) and value >= 1.0:
-            warnings.warn(
-                f"the smallness condition of Theorem 3.4 may fail: L_p ||mu|| c_0^2 / C_1 "
-                f"~= {value:.3g} >= 1; the step problem may have no unique solution",
-                stacklevel=2,
-            )
-        return {
-            "c0_sq_over_C1": ratio,
-            "L_p": Lp,
-            "mu_max": float(np.abs(self.mu).max(initial=0)),
-            "ratio": value,
-        }
+def _subset(cb: ContactBoundary, sel: NDArray[np.bool_]) -> ContactBoundary:
+    """The contact nodes ``sel`` of ``cb`` (for the data of one contact part)."""
+    return ContactBoundary(
+        nodes=cb.nodes[sel],
+        points=cb.points[sel],
+        s=cb.s[sel],
+        weights=cb.weights[sel],
+        normals=cb.normals[sel],
+        tangents=cb.tangents[sel],
+        n_dof=cb.n_dof,
+    )

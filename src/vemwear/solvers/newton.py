@@ -115,10 +115,15 @@ class CondensedNewton:
         self.system = system
         self.options = options or NewtonOptions()
         m = system.m
-        self.factor = schur_factorize(
-            system.K, system.contact_dofs.ravel(), system.dof_points, self.options.backend
-        )
-        C = self.factor.S_inv.reshape(m, 2, m, 2)  # block of K^{-1} on the contact dofs
+        cd = system.contact_dofs.ravel()
+        free = cd >= 0  # prescribed components of contact nodes are not unknowns
+        self.factor = schur_factorize(system.K, cd[free], system.dof_points, self.options.backend)
+        if np.all(free):
+            C = self.factor.S_inv.reshape(m, 2, m, 2)  # block of K^{-1} on the contact dofs
+        else:
+            full = np.zeros((2 * m, 2 * m))
+            full[np.ix_(free, free)] = self.factor.S_inv
+            C = full.reshape(m, 2, m, 2)
         nu, tau = system.normals, system.tangents
         self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
         self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)

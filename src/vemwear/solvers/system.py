@@ -43,6 +43,7 @@ class ContactSystem:
     ----------
     K : (nf, nf) sparse stiffness on the free dofs
     contact_dofs : (m, 2) free-dof ids of the x and y components at each contact node
+        (-1 for a prescribed component)
     normals, tangents : (m, 2) unit nu_a and tau_a
     weights : (m,) nodal weights
     g : (m,) thickness of the soft layer (bound on ``N u``)
@@ -67,13 +68,16 @@ class ContactSystem:
         m, nf = len(self.weights), self.K.shape[0]
         rows = np.repeat(np.arange(m), 2)
         cols = np.asarray(self.contact_dofs).ravel()
+        free = cols >= 0  # prescribed components do not enter N and Tau
         for name, direction in (("N", self.normals), ("Tau", self.tangents)):
-            op = sp.csr_matrix((np.asarray(direction).ravel(), (rows, cols)), shape=(m, nf))
+            vals = np.asarray(direction).ravel()
+            op = sp.csr_matrix((vals[free], (rows[free], cols[free])), shape=(m, nf))
             object.__setattr__(self, name, op)
         # scale of the complementarity function p_rigid + c (N u - g): the normal stiffness
         # per unit length at each node, so both terms are pressures of comparable size
         diagK = self.K.diagonal()
-        kn = np.sum(diagK[self.contact_dofs] * np.asarray(self.normals) ** 2, axis=1)
+        dK = np.where(self.contact_dofs >= 0, diagK[np.maximum(self.contact_dofs, 0)], 0.0)
+        kn = np.sum(dK * np.asarray(self.normals) ** 2, axis=1)
         object.__setattr__(self, "c_ncp", kn / self.weights)
 
     @property

@@ -1,0 +1,175 @@
+"""The boundary parts of a configuration and what each does.
+
+``[boundary]`` names where the clamped, traction, free and contact parts are and holds
+``[[boundary.displacement]]`` and ``[[boundary.traction]]`` tables; ``[contact]`` (one
+part) or ``[[contact]]`` tables (several, each with ``on``) hold the contact data. Each
+part gets a name (its key, the ``name`` of its table, or ``displacement1``, ...); a
+selector may also name a part of a mesh file (a gmsh physical group). :func:`roles`
+collects the parts with their selectors and data; the mesh is tagged with these names,
+and :class:`~vemwear.simulate.Problem` receives the roles.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..contact import ContactPart, LinearCompliance, TableCompliance
+from ..simulate import Prescribed
+from . import schema as s
+from .errors import ConfigError, at
+from .expr import Expression
+
+__all__ = ["ComponentExpression", "Roles", "contact_law", "contact_parts", "roles"]
+
+
+class ComponentExpression:
+    """A prescribed displacement component as an expression in ``x, y, t``:
+    ``f(points, t)`` -> (n,) values; ``__name__`` is its text."""
+
+    def __init__(self, expr: Expression) -> None:
+        self.expr, self.__name__ = expr, expr.text
+
+    def __call__(self, x: NDArray[np.float64], t: float) -> NDArray[np.float64]:
+        P = np.asarray(x, dtype=float).reshape(-1, 2)
+        return np.asarray(self.expr(x=P[:, 0], y=P[:, 1], t=np.full(len(P), float(t))), dtype=float)
+
+
+def contact_law(law: Any) -> LinearCompliance | TableCompliance:
+    """The compliance law of a contact table."""
+    if isinstance(law, s.LinearLaw):
+        return LinearCompliance(law.c)
+    return TableCompliance(tuple(law.r), tuple(law.p))
+
+
+@dataclass
+class Roles:
+    """The parts of a configuration.
+
+    Attributes
+    ----------
+    selectors : dict
+        ``{part name: selector}`` for :func:`vemwear.mesh.select_parts` (empty when the
+        parts are those of a mesh file).
+    where : dict
+        ``{part name: key path}`` for messages.
+    clamped : tuple of str
+    tractions : dict
+        ``{part name: (f2 value, raw f2)}`` of the traction tables (empty: the paper's
+        single ``traction`` part with ``[loads] f2``).
+    displacement : list of Prescribed
+    contacts : list of (name, Contact model, raw table, key path)
+    """
+
+    selectors: dict[str, Any] = field(default_factory=dict)
+    where: dict[str, str] = field(default_factory=dict)
+    clamped: tuple[str, ...] = ("clamped",)
+    tractions: dict[str, tuple[Any, Any]] = field(default_factory=dict)
+    displacement: list[Prescribed] = field(default_factory=list)
+    contacts: list[tuple[str, s.Contact, dict[str, Any], str]] = field(default_factory=list)
+
+    def add(self, src: str, name: str, selector: Any, path: str) -> None:
+        if name in self.selectors:
+            raise ConfigError(
+                f"{src}: {path}: the part name {name!r} is taken by {self.where[name]}; "
+                "give the parts different names"
+            )
+        self.selectors[name] = selector
+        self.where[name] = path
+
+
+def _component(v: Any) -> Any:
+    return ComponentExpression(v) if isinstance(v, Expression) else v
+
+
+def roles(src: str, c: s.ConfigFile, raw: Mapping[str, Any]) -> Roles:
+    """The parts of a validated configuration (names checked unique, every contact part
+    located)."""
+    r = Roles()
+    b = c.boundary if isinstance(c.boundary, s.Boundary) else None
+    rb: Mapping[str, Any] = raw.get("boundary", {}) if b is not None else {}
+    several = isinstance(c.contact, list)
+    tables = c.contact if isinstance(c.contact, list) else [c.contact]
+    raw_tables = raw["contact"] if several else [raw["contact"]]
+    if b is not None:
+        r.clamped = ("clamped",) if b.clamped is not None else ()
+        if b.clamped is not None:
+            r.add(src, "clamped", b.clamped, "[boundary] clamped")
+        if b.free is not None:
+            r.add(src, "free", b.free, "[boundary] free")
+        if isinstance(b.traction, list) and all(isinstance(t, s.TractionPart) for t in b.traction):
+            if "f2" in raw.get("loads", {}):
+                raise ConfigError(
+                    f"{src}: [loads] f2 is the traction of [boundary] traction; with "
+                    "[[boundary.traction]] tables give f2 in each table"
+                )
+            for i, tp in enumerate(b.traction):
+                name = tp.name or f"traction{i + 1}"
+                path = f"[[boundary.traction]] {i + 1}"
+                r.add(src, name, tp.on, path)
+                r.tractions[name] = (tp.f2, rb["traction"][i]["f2"])
+        elif b.traction is not None:
+            r.add(src, "traction", b.traction, "[boundary] traction")
+        for i, dp in enumerate(b.displacement or []):
+            name = dp.name or f"displacement{i + 1}"
+            path = f"[[boundary.displacement]] {i + 1}"
+            r.add(src, name, dp.on, path)
+            if dp.ux is None and dp.uy is None:
+                raise ConfigError(f"{src}: {path}: give ux, uy or both")
+            r.displacement.append(Prescribed(name, _component(dp.ux), _component(dp.uy)))
+    for i, (ct, rt) in enumerate(zip(tables, raw_tables, strict=True)):
+        path = f"[[contact]] {i + 1}" if several else "[contact]"
+        name = ct.name or (f"contact{i + 1}" if several else "contact")
+        on = ct.on
+        if not several and b is not None and b.contact is not None:
+            if on is not None:
+                raise ConfigError(
+                    f"{src}: [contact] on and [boundary] contact both say where the contact "
+                    "part is; keep one"
+                )
+            on = b.contact
+            path = "[boundary] contact"
+        if on is not None:
+            r.add(src, name, on, path)
+        elif b is not None or several:
+            raise ConfigError(
+                f"{src}: {path}: where is the contact part? give 'on' (a side, a segment or "
+                "a part of the mesh file)" + ("" if several else " or [boundary] contact")
+            )
+        r.contacts.append((name, ct, rt, "[contact]" if not several else path))
+    # the parts in the order of the keys of [boundary] (the first of two overlapping
+    # parts is named first in messages), the contact tables last
+    keys = list(rb)
+
+    def position(name: str) -> int:
+        m = re.match(r"\[+boundary\]*[ .](\w+)", r.where[name])
+        return keys.index(m.group(1)) if m and m.group(1) in keys else len(keys)
+
+    r.selectors = dict(sorted(r.selectors.items(), key=lambda kv: position(kv[0])))
+    return r
+
+
+def contact_parts(src: str, r: Roles, data: Any, velocity: Any) -> tuple[ContactPart, ...]:
+    """The :class:`ContactPart` of every contact table (``data`` and ``velocity`` turn
+    schema values into the library's)."""
+    out = []
+    for name, ct, rt, path in r.contacts:
+        with at(src, path, rt, key="p"):
+            law = contact_law(ct.p)
+        out.append(
+            ContactPart(
+                name,
+                law,
+                data(ct.g, None, None),
+                data(ct.mu, None, None),
+                data(ct.kappa, None, None),
+                data(ct.v_star, velocity, rt["v_star"]),
+                data(ct.gap, None, None),
+            )
+        )
+    return tuple(out)
