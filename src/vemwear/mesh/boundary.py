@@ -127,8 +127,7 @@ def _named(mesh: Mesh, part: str, it: str) -> NDArray[np.bool_]:
     own = f"; the mesh's parts are {', '.join(mesh.parts)}" if mesh.parts else ""
     hint = f"; did you mean {close[0]!r}?" if close else ""
     raise ValueError(
-        f"{part} is neither a side ({', '.join(SIDES)}), 'rest' nor a part of the mesh"
-        f"{own}{hint}"
+        f"{part} is neither a side ({', '.join(SIDES)}), 'rest' nor a part of the mesh{own}{hint}"
     )
 
 
