@@ -556,7 +556,7 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
             ("vemwear.runner.outdir", "OutputDirError"),
             ("vemwear.runner.plan", "PlanError"),
             ("vemwear.mesh.polymesh", "MeshError"),
-            ("vemwear.simulate.problem", "DataError"),
+            ("vemwear.simulate.discrete", "DataError"),
         )
     ):
         return EXIT_INPUT, str(exc)

@@ -24,7 +24,11 @@ from ..vem import stiffness
 if TYPE_CHECKING:
     from .problem import Problem
 
-__all__ = ["Discretization"]
+__all__ = ["DataError", "Discretization"]
+
+
+class DataError(ValueError):
+    """Data that give non-finite numbers (an overflow), named with the quantity."""
 
 
 class Discretization:
@@ -40,8 +44,6 @@ class Discretization:
     """
 
     def __init__(self, problem: Problem) -> None:
-        from .problem import DataError
-
         mesh = problem.mesh
         self.problem = problem
         self.contact: ContactBoundary = problem.contact
@@ -123,8 +125,6 @@ class Discretization:
         edge quadrature, the lifting of prescribed displacements)."""
         if self._constant_load and self._F0 is not None:
             return self._F0
-        from .problem import DataError
-
         pr = self.problem
         with np.errstate(all="ignore"):
             F = pr.external_load(t)

@@ -35,14 +35,13 @@ from ..util.hashing import sha256_arrays
 from ..vem import Material, body_force_vector, edge_load_vector
 from ..vem.assembly import Field
 from .constraints import Constraints, Prescribed
+from .discrete import DataError
 from .timegrid import TimeGrid
 
 if TYPE_CHECKING:
     from .discrete import Discretization
 
-
-class DataError(ValueError):
-    """Data that give non-finite numbers (an overflow), named with the quantity."""
+__all__ = ["DataError", "Problem"]
 
 
 @dataclass(frozen=True, eq=False)
