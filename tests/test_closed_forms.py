@@ -76,6 +76,14 @@ def test_pushed_block_wears_as_the_closed_form(family: str, gap: float) -> None:
     assert np.abs(r.p_soft - K_S * e[:, None]).max() < 1e-14
     assert np.abs(r.p_rigid).max() == 0.0
     assert np.abs(r.penetration - (r.u_nu - gap - r.wear)).max() == 0.0
+    # force resultants: the layer pushes up by k_s e W, the top holds it, the rollers'
+    # two sides cancel; no body force, so they balance
+    assert r.force_parts == (("contact", "contact"), ("rollers", "reaction"), ("top", "reaction"))
+    F = r.forces
+    assert F is not None
+    assert np.abs(F[:, 0, 1] - K_S * e * W).max() < 1e-13
+    assert np.abs(F[:, 2, 1] + K_S * e * W).max() < 1e-13
+    assert np.abs(F.sum(axis=1)).max() < 1e-13
     # the field is uniaxial: u_x = 0 everywhere, u_y linear in y
     u = r.displacement(-1)
     P = r.problem.mesh.points

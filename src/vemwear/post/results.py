@@ -30,9 +30,11 @@
                                            ``cells_offsets[k + 1]]``
     ``cells_vertices``          (sum n_K,) concatenated counter-clockwise vertex ids
     ``boundary_tags``           (B,)       part code of every boundary edge (1 clamped,
-                                           2 traction, 3 contact, 0 untagged), in the
-                                           canonical order of ``Mesh.boundary_edges``;
-                                           see :func:`mesh_from_arrays`
+                                           2 traction, 3 contact, then ``part_names``
+                                           from 4 on, 0 untagged), in the canonical
+                                           order of ``Mesh.boundary_edges``; see
+                                           :func:`mesh_from_arrays`
+    ``part_names``              (P_b,)     names of the part codes 1, 2, ...
     ``u``                       (S, n, 2)  displacement ``u_h(t_n)`` at the vertices
                                            (the VEM degrees of freedom) at the kept
                                            levels of ``u_levels`` [length]
@@ -49,12 +51,22 @@
                                            area (volume per unit depth)
     ``g``, ``mu``, ``kappa``    (m,)       layer thickness [length], friction and wear
                                            coefficients at the contact nodes
+    ``gap``                     (m,)       initial gap at the contact nodes [length]
+    ``contact_part``            (m,)       the contact part of each node (an index
+                                           into ``contact_part_names``)
+    ``contact_part_names``      (P_c,)     names of the contact parts
+    ``forces``                  (K, P, 2)  force resultants on the body: of the layer
+                                           of each contact part, then the reaction of
+                                           each clamped or prescribed part [force per
+                                           unit depth]
+    ``force_parts``             (P,)       the parts of the rows of ``forces``
+    ``force_kinds``             (P,)       ``contact`` or ``reaction``
     ``wear``                    (K, m)     wear ``w^n`` of the soft layer (the depth of
                                            material removed) [length]; ``w^0 = 0``
     ``u_nu``                    (K, m)     normal displacement ``u_nu(t_n) = u . nu_a``
                                            [length]; the unilateral constraint is
-                                           ``u_nu <= g``
-    ``penetration``             (K, m)     ``u_nu - wear``: the penetration into the
+                                           ``u_nu - gap <= g``
+    ``penetration``             (K, m)     ``u_nu - gap - wear``: the penetration into the
                                            soft layer, the argument of the normal
                                            compliance ``p`` [length]
     ``lam``                     (K, m)     pressure of the rigid layer, the multiplier
@@ -146,6 +158,7 @@ def static_arrays(problem: Any, plan: Any) -> dict[str, NDArray[Any]]:
         "cells_offsets": np.asarray(mesh.cell_offsets, dtype=np.int64),
         "cells_vertices": np.asarray(mesh.cell_vertices, dtype=np.int64),
         "boundary_tags": np.asarray(mesh.boundary_tags, dtype=np.int8),
+        "part_names": np.array(mesh.part_names, dtype=str),
         "u_levels": np.searchsorted(plan.levels, plan.u_levels).astype(np.int64),
         "contact_nodes": np.asarray(cb.nodes, dtype=np.int64),
         "contact_s": np.asarray(cb.s, dtype=np.float64),
@@ -155,6 +168,11 @@ def static_arrays(problem: Any, plan: Any) -> dict[str, NDArray[Any]]:
         "g": np.asarray(nodal["g"], dtype=np.float64),
         "mu": np.asarray(nodal["mu"], dtype=np.float64),
         "kappa": np.asarray(nodal["kappa"], dtype=np.float64),
+        "gap": np.asarray(nodal["gap"], dtype=np.float64),
+        "contact_part": np.asarray(cb.part, dtype=np.int64),
+        "contact_part_names": np.array(cb.part_names, dtype=str),
+        "force_parts": np.array([n for n, _ in problem.discrete.force_parts], dtype=str),
+        "force_kinds": np.array([k for _, k in problem.discrete.force_parts], dtype=str),
         "residual_names": np.array(("equilibrium", "feasibility", "complementarity"), dtype=str),
         "vemwear_version": np.array(__version__, dtype=str),
     }
@@ -190,6 +208,8 @@ def result_arrays(result: Result) -> dict[str, NDArray[Any]]:
         residual_names=np.array(result.RESIDUAL_NAMES, dtype=str),
         completed=np.array(int(result.completed), dtype=np.int64),
     )
+    if result.forces is not None:
+        out["forces"] = np.asarray(result.forces, dtype=np.float64)
     return out
 
 
@@ -402,6 +422,7 @@ def mesh_from_arrays(data: Mapping[str, NDArray[Any]]) -> Mesh:
         np.asarray(data["cells_offsets"]),
         np.asarray(data["cells_vertices"]),
         None if tags is None else np.asarray(tags),
+        *([tuple(str(n) for n in data["part_names"])] if "part_names" in data else []),
     )
 
 
@@ -525,4 +546,5 @@ def result_from_arrays(
         completed=completed,
         solver=dict(solver or {}),
         levels=levels.copy(),
+        forces=np.asarray(data["forces"], dtype=np.float64).copy() if "forces" in data else None,
     )

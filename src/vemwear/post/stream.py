@@ -47,7 +47,7 @@ __all__ = [
 #: File name of the streamed result in an output directory.
 STREAM_NAME = "result.h5"
 #: Arrays with one row per kept level, and the shape of a row (m: contact nodes).
-ROW_ARRAYS = ("wear", "u_nu", "penetration", "lam", "p", "iterations", "residuals")
+ROW_ARRAYS = ("wear", "u_nu", "penetration", "lam", "p", "iterations", "residuals", "forces")
 _BUFFER_BYTES = 1 << 20
 
 
@@ -109,6 +109,7 @@ class H5Sink:
             "p": ((K, m), np.float64),
             "iterations": ((K,), np.int64),
             "residuals": ((K, 3), np.float64),
+            "forces": ((K, len(problem.discrete.force_parts), 2), np.float64),
         }
         if resume:
             self.file = h5py.File(self.path, "r+")
@@ -167,6 +168,8 @@ class H5Sink:
         b["iterations"][i] = solution.iterations
         res = solution.residuals
         b["residuals"][i] = (res["equilibrium"], res["feasibility"], res["complementarity"])
+        if solution.forces is not None:
+            b["forces"][i] = solution.forces
         self.buf_len += 1
 
     def displacement(

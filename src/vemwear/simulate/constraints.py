@@ -74,19 +74,22 @@ class Constraints:
         self, mesh: Mesh, clamped: Sequence[str], prescribed: Sequence[Prescribed]
     ) -> None:
         n = 2 * mesh.n_points
-        owner = -np.ones(n, dtype=np.int64)  # -1 free, 0 clamped, 1 + i prescribed[i]
-        for name in clamped:
-            if name in mesh.part_names:
-                v = mesh.part_vertices(name)
-                for c in (0, 1):
-                    d = 2 * v + c
-                    owner[d[owner[d] < 0]] = 0
+        clamped = tuple(c for c in clamped if mesh.has_part(c))
+        #: the constraining parts: the clamped ones, then the prescribed ones
+        self.parts = (*clamped, *(p.part for p in prescribed))
+        self.n_clamped = len(clamped)
+        owner = -np.ones(n, dtype=np.int64)  # -1 free, else the index in self.parts
+        for i, name in enumerate(clamped):
+            v = mesh.part_vertices(name)
+            for c in (0, 1):
+                d = 2 * v + c
+                owner[d[owner[d] < 0]] = i
         for i, pr in enumerate(prescribed):
             v = mesh.part_vertices(pr.part)
             for c, spec in enumerate((pr.ux, pr.uy)):
                 if spec is not None:
                     d = 2 * v + c
-                    owner[d[owner[d] < 0]] = 1 + i
+                    owner[d[owner[d] < 0]] = self.n_clamped + i
         self.mesh = mesh
         self.prescribed = tuple(prescribed)
         self.dofs = np.flatnonzero(owner >= 0)
@@ -113,7 +116,7 @@ class Constraints:
         P = self.mesh.points
         for i, pr in enumerate(self.prescribed):
             for c, spec in enumerate((pr.ux, pr.uy)):
-                sel = (self.owner == 1 + i) & (self.dofs % 2 == c)
+                sel = (self.owner == self.n_clamped + i) & (self.dofs % 2 == c)
                 if spec is None or not np.any(sel):
                     continue
                 if callable(spec):

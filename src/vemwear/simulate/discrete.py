@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -85,6 +85,10 @@ class Discretization:
             or con.time_dependent
         )
         self._F0: NDArray | None = None
+        self._solvers: dict[Any, Any] = {}
+        self._reaction: tuple[NDArray, sp.csr_matrix] | None = None
+        self._K_cc = sp.csr_matrix((0, 0))
+        self._Fc0: NDArray | None = None
 
     def _contact_offset(self, cdofs: NDArray[np.int64]) -> NDArray[np.float64]:
         """``nu_a . u_c`` at the contact nodes from their prescribed components, which
@@ -115,6 +119,13 @@ class Discretization:
                         "unknown of the contact problem: prescribe it on other parts"
                     )
         return off
+
+    def step_solver(self, opts: Any) -> Any:
+        """The step solver of ``opts`` on this system, built once (one factorization of
+        K however many runs use it, e.g. the cycles of a cycle jump)."""
+        if opts not in self._solvers:
+            self._solvers[opts] = opts.build(self.system)
+        return self._solvers[opts]
 
     @property
     def n_dof(self) -> int:
@@ -158,11 +169,80 @@ class Discretization:
         """``alpha(t) = kappa |v*_tau(t)|`` at the contact nodes (2.2 for any Gamma_C)."""
         return self.kappa * np.abs(self.tangential_velocity(t))
 
-    def physical(self, solution: StepSolution) -> StepSolution:
-        """The solution with its true normal displacement ``u_nu = y + offset``."""
-        if not np.any(self.offset):
-            return solution
-        return dataclasses.replace(solution, u_nu=solution.u_nu + self.offset)
+    @property
+    def force_parts(self) -> tuple[tuple[str, str], ...]:
+        """``(part, kind)`` of the rows of :meth:`resultants`: every contact part
+        (``"contact"``), then every clamped and prescribed part (``"reaction"``)."""
+        cb, con = self.contact, self.constraints
+        return (*((n, "contact") for n in cb.part_names), *((n, "reaction") for n in con.parts))
+
+    def resultants(self, step: StepData, solution: StepSolution, solver: Any) -> NDArray:
+        """(P, 2) force resultants on the body at a level (rows :attr:`force_parts`):
+        the force of each contact part's layer, ``-sum_a omega_a [(p_soft + p_rigid)
+        nu_a + fric_a p_soft tau_a]``, and the reaction of each clamped or prescribed
+        part, ``(K u - f_h)`` summed over its constrained dofs (the contact forces on
+        prescribed components of contact nodes included). The reactions come from the
+        condensed data, without recovering u: ``K_cf u_f = Z^T (F - forces_f)`` with
+        ``Z = K_ff^{-1} K_fc E`` computed once."""
+        cb, con, s = self.contact, self.constraints, self.system
+        p_soft, p_rigid = solution.p_soft, solution.p_rigid
+        normal = cb.weights * (p_soft + p_rigid)
+        tangent = cb.weights * step.fric * p_soft
+        node_force = -(normal[:, None] * cb.normals + tangent[:, None] * cb.tangents)
+        out = np.zeros((len(cb.part_names) + len(con.parts), 2))
+        np.add.at(out, cb.part, node_force)
+        if not con.parts:
+            return out
+        Z, E = self._reaction_operators(solver)
+        layer = cb.N.T @ normal + cb.Tau.T @ tangent  # on all dofs
+        u_c = con.values(step.t)
+        rhs = step.F - layer[self.free]
+        r_c = self._K_cc @ u_c - self._F_ext_c(step.t) + layer[con.dofs]
+        out[len(cb.part_names) :] = (Z.T @ rhs + E.T @ r_c).reshape(-1, 2)
+        return out
+
+    def _reaction_operators(self, solver: Any) -> tuple[NDArray, sp.csr_matrix]:
+        if self._reaction is None:
+            con = self.constraints
+            cols = con.owner * 2 + con.dofs % 2  # (part, component) of each constrained dof
+            E = sp.csr_matrix(
+                (np.ones(len(con.dofs)), (np.arange(len(con.dofs)), cols)),
+                shape=(len(con.dofs), 2 * len(con.parts)),
+            )
+            Kfc = self.K_full[self.free][:, con.dofs].tocsr()
+            B = np.asarray((Kfc @ E).todense())
+            factor = getattr(solver, "factor", None)
+            if factor is not None:
+                Z = factor.solve(B)
+            else:
+                import scipy.sparse.linalg as spla
+
+                Z = spla.splu(self.system.K.tocsc()).solve(B)
+            self._K_cc = self.K_full[con.dofs][:, con.dofs].tocsr()
+            self._reaction = (np.asarray(Z).reshape(len(self.free), -1), E)
+        return self._reaction
+
+    def _F_ext_c(self, t: float) -> NDArray[np.float64]:
+        """The external load on the constrained dofs at time t."""
+        if self._Fc0 is not None:
+            return self._Fc0
+        with np.errstate(all="ignore"):
+            F = self.problem.external_load(t)[self.constraints.dofs]
+        if self._constant_load:
+            self._Fc0 = F
+        return F
+
+    def physical(
+        self, solution: StepSolution, step: StepData | None = None, solver: Any = None
+    ) -> StepSolution:
+        """The solution with its true normal displacement ``u_nu = y + offset`` and, with
+        ``step`` and ``solver``, its force resultants (:meth:`resultants`)."""
+        changes: dict[str, Any] = {}
+        if np.any(self.offset):
+            changes["u_nu"] = solution.u_nu + self.offset
+        if step is not None:
+            changes["forces"] = self.resultants(step, solution, solver)
+        return dataclasses.replace(solution, **changes) if changes else solution
 
     def full_displacement(
         self, u_free: NDArray[np.float64], t: float | None = None

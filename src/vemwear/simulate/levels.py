@@ -91,7 +91,7 @@ def run_levels(
     sysm = d.system
     timings["assembly"] = time.perf_counter() - t0
     t1 = time.perf_counter()
-    step_solver: Any = opts.build(sysm)
+    step_solver: Any = d.step_solver(opts)
     timings["setup"] = time.perf_counter() - t1
     for k, v in getattr(getattr(step_solver, "factor", None), "timings", {}).items():
         timings[f"setup_{k}"] = v
@@ -139,7 +139,7 @@ def run_levels(
             step = d.step_data(n, w)
             store_here = bool(slot[n] >= 0)
             sol = step_solver.solve(step, guess, recover=store_here and not batch)
-            sink.level(n, w, d.physical(sol))
+            sink.level(n, w, d.physical(sol, step, step_solver))
             if store_here:
                 if sol.u is not None:
                     sink.displacement(n, d.full_displacement(sol.u, step.t), None)

@@ -58,6 +58,10 @@ class Result:
         The solver options the levels were computed with.
     timings : dict
         Wall times of the stages, in seconds.
+    forces : (K, P, 2) ndarray, optional
+        Force resultants on the body per kept level: of every contact part's layer,
+        then the reaction of every clamped or prescribed part (the rows of
+        :attr:`force_parts`).
     """
 
     problem: Problem
@@ -78,8 +82,14 @@ class Result:
     levels: NDArray[np.int64] | None = None
     solver: dict[str, Any] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
+    forces: NDArray[np.float64] | None = None
 
     RESIDUAL_NAMES = RESIDUAL_NAMES
+
+    @property
+    def force_parts(self) -> tuple[tuple[str, str], ...]:
+        """``(part, kind)`` of the rows of :attr:`forces` (kind "contact" or "reaction")."""
+        return self.problem.discrete.force_parts
 
     @property
     def penetration(self) -> NDArray[np.float64]:
@@ -133,6 +143,7 @@ def simulate(
     recover_block: int = 32,
     resume: Result | None = None,
     callback: Callable[[int, StepSolution], None] | None = None,
+    initial_wear: ArrayLike | None = None,
 ) -> Result:
     """Run the fully discrete scheme (Problem 3.3) on the problem's time grid.
 
@@ -168,6 +179,9 @@ def simulate(
         be, so the result is the same.
     callback : callable, optional
         ``callback(n, step_solution)`` after each level ``n``.
+    initial_wear : array_like, optional
+        ``w^0`` at the contact nodes instead of 0 (3.23), e.g. the wear after earlier
+        cycles (:func:`vemwear.simulate.cycles.simulate_cycles`).
 
     Returns
     -------
@@ -197,6 +211,14 @@ def simulate(
         if every != 1 or resume.levels is None or len(resume.levels) != len(resume.t):
             raise ValueError("resume: needs results that keep every level (every = 1)")
         start = _restart(sink.result, resume, problem)
+    elif initial_wear is not None:
+        w0 = np.array(initial_wear, dtype=float)
+        if w0.shape != (sink.result.contact_nodes.size,):
+            raise ValueError(
+                f"initial_wear must have one value per contact node "
+                f"({sink.result.contact_nodes.size}), got shape {w0.shape}"
+            )
+        start = LoopState(0, w0)
     try:
         run_levels(
             problem,
@@ -243,6 +265,7 @@ class MemorySink:
             solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
             completed=0,
             levels=plan.levels.copy(),
+            forces=np.zeros((K, len(d.force_parts), 2)),
         )
 
     def level(self, n: int, w: NDArray[np.float64], solution: StepSolution) -> None:
@@ -253,6 +276,8 @@ class MemorySink:
         out.p_rigid[r], out.p_soft[r] = solution.p_rigid, solution.p_soft
         out.iterations[r] = solution.iterations
         out.residuals[r] = [solution.residuals[k] for k in RESIDUAL_NAMES]
+        if solution.forces is not None and out.forces is not None:
+            out.forces[r] = solution.forces
 
     def displacement(
         self, n: int, u: NDArray[np.float64], residuals: NDArray[np.float64] | None
@@ -272,7 +297,8 @@ def _truncate(r: Result, c: int) -> Result:
     keep = r.u_levels < c
     arrays = {
         k: getattr(r, k).copy()
-        for k in ("wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals")
+        for k in ("wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals", "forces")
+        if getattr(r, k) is not None
     }
     for a in arrays.values():
         a[levels >= c] = 0
@@ -291,8 +317,9 @@ def _restart(out: Result, prev: Result, problem: Problem) -> LoopState:
         raise ValueError("resume: the partial result has other contact nodes (another mesh?)")
     if c <= 0:
         return LoopState(0, np.zeros(out.wear.shape[1]))
-    for name in ("wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals"):
-        getattr(out, name)[:c] = getattr(prev, name)[:c]
+    for name in ("wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals", "forces"):
+        if getattr(prev, name) is not None and getattr(out, name) is not None:
+            getattr(out, name)[:c] = getattr(prev, name)[:c]
     slot = -np.ones(len(out.t), dtype=np.int64)
     slot[out.u_levels] = np.arange(len(out.u_levels))
     for j, lv in enumerate(prev.u_levels):
@@ -315,7 +342,7 @@ def _restart(out: Result, prev: Result, problem: Problem) -> LoopState:
         u_last = out.u[slot[c - 1]].ravel()[d.free]
     guess = StepSolution(
         u=u_last,
-        u_nu=out.u_nu[c - 1].copy(),
+        u_nu=out.u_nu[c - 1] - d.offset,  # the solver's unknown y = N_f u_f
         p_rigid=out.p_rigid[c - 1].copy(),
         p_soft=out.p_soft[c - 1].copy(),
         iterations=0,

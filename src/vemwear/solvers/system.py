@@ -122,6 +122,7 @@ class StepSolution:
     p_soft: NDArray[np.float64]
     iterations: int
     residuals: dict[str, float]
+    forces: NDArray[np.float64] | None = None
 
 
 def _residuals(
