@@ -184,7 +184,7 @@ class Discretization:
         prescribed components of contact nodes included). The reactions come from the
         condensed data, without recovering u: ``K_cf u_f = Z^T (F - forces_f)`` with
         ``Z = K_ff^{-1} K_fc E`` computed once."""
-        cb, con, s = self.contact, self.constraints, self.system
+        cb, con = self.contact, self.constraints
         p_soft, p_rigid = solution.p_soft, solution.p_rigid
         normal = cb.weights * (p_soft + p_rigid)
         tangent = cb.weights * step.fric * p_soft
