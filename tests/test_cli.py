@@ -117,6 +117,7 @@ def test_run_writes_everything(
         "displacement.png",
         "deformed.png",
         "time_history.png",
+        "forces.png",
         "solution.xdmf",
         "solution.h5",
         "result.h5",

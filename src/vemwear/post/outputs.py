@@ -18,6 +18,7 @@ FIGURE_NAMES = {
     "displacement": "displacement.png",
     "deformed": "deformed.png",
     "time_history": "time_history.png",
+    "forces": "forces.png",
 }
 
 
@@ -74,6 +75,9 @@ def write_outputs(
         post.plot_displacement(result, last, out / FIGURE_NAMES["displacement"])
         post.plot_deformed(result, last, out / FIGURE_NAMES["deformed"])
         post.plot_time_history(result, out / FIGURE_NAMES["time_history"])
+        from .forces import plot_forces
+
+        plot_forces(result, out / FIGURE_NAMES["forces"])
         written["figures"] += list(FIGURE_NAMES.values())
     if vtk and paraview == "xdmf":
         from .xdmf import write_xdmf_series

@@ -93,10 +93,14 @@ def _finish(fig: Figure, path: str | os.PathLike[str] | None) -> Figure:
     return fig
 
 
-def _abscissa(result: Result, abscissa: str = "auto") -> tuple[NDArray[np.float64], str]:
-    """Coordinate along Gamma_C: ``x`` (``x_1``) on a horizontal straight contact part,
-    ``y`` on a vertical one, the arc length ``s`` otherwise (or as asked)."""
-    pts = np.asarray(result.contact_points, dtype=float)
+def _abscissa(
+    result: Result, abscissa: str = "auto", sel: NDArray[np.bool_] | None = None
+) -> tuple[NDArray[np.float64], str]:
+    """Coordinate along Gamma_C (the nodes ``sel``): ``x`` (``x_1``) on a horizontal
+    straight contact part, ``y`` on a vertical one, the arc length ``s`` otherwise (or
+    as asked)."""
+    sel = np.ones(len(result.contact_s), dtype=bool) if sel is None else sel
+    pts = np.asarray(result.contact_points, dtype=float)[sel]
     if abscissa == "auto":
         size = float(np.ptp(np.asarray(result.points), axis=0).max()) or 1.0
         tol = 1e-9 * size
@@ -111,23 +115,23 @@ def _abscissa(result: Result, abscissa: str = "auto") -> tuple[NDArray[np.float6
     if abscissa == "y":
         return pts[:, 1], abscissa
     if abscissa == "s":
-        return np.asarray(result.contact_s, dtype=float), abscissa
+        return np.asarray(result.contact_s, dtype=float)[sel], abscissa
     raise ValueError(f"abscissa must be 'auto', 'x', 'y' or 's', got {abscissa!r}")
 
 
-def _extent(result: Result, which: str) -> tuple[float, float]:
+def _extent(result: Result, which: str, part: str = "contact") -> tuple[float, float]:
     """Range of the abscissa over the whole contact part (including endpoints on Gamma_D,
     where there is no contact node), with a small margin."""
     mesh = result.problem.mesh
     if which == "s":
         lo, hi = 0.0, float(np.max(result.contact_s, initial=0.0))
-        ce = mesh.part_edges("contact")
+        ce = mesh.part_edges(part)
         if len(ce):  # a chain may end on Gamma_D, beyond its last contact node
             lengths = np.linalg.norm(mesh.points[ce[:, 1]] - mesh.points[ce[:, 0]], axis=1)
             hi = max(hi, *(float(lengths[ch].sum()) for ch in _edge_chains(ce)))
     else:
         k = 0 if which == "x" else 1
-        v = mesh.points[np.unique(mesh.part_edges("contact")), k]
+        v = mesh.points[np.unique(mesh.part_edges(part)), k]
         if v.size == 0:
             v = np.asarray(result.contact_points)[:, k]
         lo, hi = float(v.min()), float(v.max())
@@ -230,28 +234,35 @@ def plot_contact_profiles(
     Returns
     -------
     Figure
-        Two panels side by side, one line per time.
+        Two panels side by side, one line per time; one row of panels per contact part,
+        each against its own coordinate.
     """
     times = _default_times(result) if times is None else list(times)
     levels = [result.level(t) for t in times]
-    x, which = _abscissa(result, abscissa)
-    order = np.argsort(x, kind="stable") if which != "s" else np.arange(len(x))
-    breaks = _chain_breaks(result) if which == "s" else np.zeros(0, np.int64)
-    fig = Figure(figsize=(10.0, 3.9), layout="constrained")
-    axes = fig.subplots(1, 2, sharex=True)
+    cb = result.problem.contact
+    names = cb.part_names
+    fig = Figure(figsize=(10.0, 3.9 * len(names)), layout="constrained")
+    axes = np.asarray(fig.subplots(len(names), 2, squeeze=False))
     colors = _time_colors(len(levels))
-    mk = _marker_kw(len(x))
-    for ax, name in zip(axes, ("wear", "penetration"), strict=True):
-        data = _contact_quantity(result, name)
-        for lv, c in zip(levels, colors, strict=True):
-            xs, ys = _broken(x[order], data[lv][order], breaks)
-            ax.plot(xs, ys, color=c, lw=1.6, label=f"$t$ = {result.t[lv]:g}", **mk)
-        ax.set_xlabel(_ABSCISSA_LABEL[which])
-        ax.set_ylabel(QUANTITIES[name])
-        ax.set_title(_cap(QUANTITIES[name]) + r" on $\Gamma_C$")
-        ax.grid(True, lw=0.4, alpha=0.5)
-        ax.set_xlim(*_extent(result, which))
-    axes[0].legend(loc="best", frameon=False)
+    for i, part in enumerate(names):
+        sel = np.asarray(cb.part == i)
+        x, which = _abscissa(result, abscissa, sel)
+        order = np.argsort(x, kind="stable") if which != "s" else np.arange(len(x))
+        s_part = np.asarray(result.contact_s, dtype=float)[sel]
+        breaks = np.flatnonzero(np.diff(s_part) <= 0) + 1 if which == "s" else np.zeros(0, int)
+        mk = _marker_kw(len(x))
+        where = r"$\Gamma_C$" if len(names) == 1 else f"{part}"
+        for ax, name in zip(axes[i], ("wear", "penetration"), strict=True):
+            data = _contact_quantity(result, name)[:, sel]
+            for lv, c in zip(levels, colors, strict=True):
+                xs, ys = _broken(x[order], data[lv][order], breaks)
+                ax.plot(xs, ys, color=c, lw=1.6, label=f"$t$ = {result.t[lv]:g}", **mk)
+            ax.set_xlabel(_ABSCISSA_LABEL[which])
+            ax.set_ylabel(QUANTITIES[name])
+            ax.set_title(_cap(QUANTITIES[name]) + f" on {where}")
+            ax.grid(True, lw=0.4, alpha=0.5)
+            ax.set_xlim(*_extent(result, which, part))
+    axes[0, 0].legend(loc="best", frameon=False)
     fig.suptitle(title if title is not None else f"Wear and penetration: {_params(result)}")
     return _finish(fig, path)
 

@@ -294,6 +294,19 @@ def summarize(result: Result) -> dict[str, Any]:
         "nodes_in_contact_final": int(np.sum(pen[-1] > 0)) if c else 0,
         "nodes_on_rigid_layer_final": int(np.sum(active <= 1e-9 * g_scale)),
     }
+    cb = result.problem.contact
+    if len(cb.part_names) > 1:  # per contact part: its own wear
+        outputs["contact_parts"] = {
+            name: {
+                "wear_max_final": _max(wear_T[cb.part == i]),
+                "wear_area_final": float(np.dot(weights[cb.part == i], wear_T[cb.part == i])),
+            }
+            for i, name in enumerate(cb.part_names)
+        }
+    if result.forces is not None and c:
+        from .forces import force_table
+
+        outputs["forces_final"] = force_table(result)
     return {"statistics": stats, "outputs": outputs}
 
 

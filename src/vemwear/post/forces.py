@@ -1,0 +1,91 @@
+"""Force resultants per boundary part over time: a figure and the summary's table.
+
+The rows of :attr:`vemwear.simulate.Result.forces` are the force of the layer of each
+contact part on the body and the reaction of each clamped or prescribed part
+(:attr:`~vemwear.simulate.Result.force_parts`). For a contact part the normal force is
+the resultant's component against the mean outward normal of the part, the
+tangential force the rest (the friction the sliding foundation exerts).
+"""
+
+from __future__ import annotations
+
+import os
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from matplotlib.figure import Figure
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from ..simulate.loop import Result
+
+__all__ = ["force_table", "part_directions", "plot_forces"]
+
+
+def part_directions(result: Result) -> dict[str, NDArray[np.float64]]:
+    """The mean outward unit normal of every contact part (weighted by the nodal weights)."""
+    cb = result.problem.contact
+    out = {}
+    for i, name in enumerate(cb.part_names):
+        sel = cb.part == i
+        n = (cb.weights[sel, None] * cb.normals[sel]).sum(axis=0)
+        out[name] = n / max(float(np.linalg.norm(n)), 1e-300)
+    return out
+
+
+def force_table(result: Result) -> list[dict[str, Any]]:
+    """Per part, at the last kept level: the resultant, and for contact parts its
+    normal (compressive positive) and tangential components; for all parts the largest
+    magnitude over time."""
+    F = result.forces
+    if F is None:
+        return []
+    normals = part_directions(result)
+    rows = []
+    for j, (name, kind) in enumerate(result.force_parts):
+        last = F[-1, j]
+        row: dict[str, Any] = {
+            "part": name,
+            "kind": kind,
+            "force": last.tolist(),
+            "max_magnitude": float(np.linalg.norm(F[:, j], axis=1).max(initial=0.0)),
+        }
+        if kind == "contact":
+            n = normals[name]
+            row["normal"] = float(-last @ n)
+            row["tangential"] = float(last @ np.array([-n[1], n[0]]))
+        rows.append(row)
+    return rows
+
+
+def plot_forces(result: Result, path: str | os.PathLike[str] | None = None) -> Figure:
+    """Force resultants against time: per contact part the normal and tangential force of
+    its layer, per clamped or prescribed part the two components of its reaction."""
+    from .plots import DPI
+
+    F = np.asarray(result.forces) if result.forces is not None else np.zeros((len(result.t), 0, 2))
+    t = np.asarray(result.t)
+    normals = part_directions(result)
+    fig = Figure(figsize=(10.0, 4.0), layout="constrained")
+    ax_c, ax_r = fig.subplots(1, 2)
+    for j, (name, kind) in enumerate(result.force_parts):
+        if kind == "contact":
+            n = normals[name]
+            ax_c.plot(t, -F[:, j] @ n, lw=1.8, label=f"{name}: normal")
+            ax_c.plot(
+                t, F[:, j] @ np.array([-n[1], n[0]]), lw=1.4, ls="--", label=f"{name}: tangential"
+            )
+        else:
+            ax_r.plot(t, F[:, j, 0], lw=1.6, label=f"{name}: $R_x$")
+            ax_r.plot(t, F[:, j, 1], lw=1.6, ls="--", label=f"{name}: $R_y$")
+    ax_c.set_title("contact parts: force of the layer on the body")
+    ax_r.set_title("clamped and prescribed parts: reactions")
+    for ax in (ax_c, ax_r):
+        ax.set_xlabel(r"time $t$")
+        ax.set_ylabel("force per unit depth")
+        ax.grid(True, lw=0.4, alpha=0.5)
+        if ax.lines:
+            ax.legend(loc="best", frameon=False, fontsize=8)
+    if path is not None:
+        fig.savefig(path, dpi=DPI)
+    return fig
