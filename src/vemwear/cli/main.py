@@ -333,6 +333,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     admit = admit_sizes(args.outdir, force_size=args.force_size)
     cfg = load_config(args.config, admit=admit)
     solver = _solver_options(cfg.solver, args.solver)
+    if cfg.cycles is not None and args.resume:
+        raise UsageError("--resume: a run with [time] cycle_jump is not checkpointed; run it again")
     stale = [] if args.force else stale_temporaries(args.outdir)
     if stale:
         say(
@@ -360,6 +362,26 @@ def cmd_run(args: argparse.Namespace) -> int:
             say(f"{PROG}: warning: {w}")
     if not args.no_progress:
         say(f"{PROG}: {cfg.title}: " + ", ".join(f"{k} {v}" for k, v in est.rows()))
+    if cfg.cycles is not None:
+        from ..runner.cycles import execute_cycles
+
+        _last, cres = execute_cycles(plan, progress=not args.no_progress)
+        print(
+            f"{PROG}: {cfg.title}: done\n"
+            + rows_text(
+                [
+                    (
+                        "cycles",
+                        f"{cfg.cycles.cycles}, {len(cres.computed)} computed (jump "
+                        f"{cfg.cycles.jump}, max increment {cfg.cycles.max_increment:g} g)",
+                    ),
+                    ("max wear", f"{float(cres.wear[-1].max(initial=0.0)):.6g}"),
+                    ("time", f"{time.perf_counter() - t0:.2f} s"),
+                    ("output", str(plan.out)),
+                ]
+            )
+        )
+        return EXIT_OK
     result = execute_run(plan, progress=not args.no_progress)
     if isinstance(result, str):  # the arrays do not fit in memory: result.h5 only
         print(f"{PROG}: {cfg.title}: done; {result}")

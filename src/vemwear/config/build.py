@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from ..mesh import Mesh, MeshError, read_mesh, select_parts
 from ..mesh.registry import family
 from ..simulate import Problem, SolverOptions, TimeGrid
+from ..simulate.cycles import CycleJump
 from ..solvers import resolve_backend
 from ..vem import Material, body_force_vector, edge_load_vector
 from . import schema as s
@@ -70,6 +71,8 @@ class Config:
         ``{"file": absolute path}`` or ``{"generator": name, "function": ..., options}``.
     model : ConfigFile
         The validated schema model.
+    cycles : CycleJump or None
+        ``[time] cycle_jump``: the grid is one cycle of a periodic loading.
     """
 
     path: Path | None
@@ -80,6 +83,7 @@ class Config:
     output: OutputOptions
     mesh_source: dict[str, Any] = field(default_factory=dict)
     model: s.ConfigFile | None = None
+    cycles: CycleJump | None = None
 
 
 @dataclass(frozen=True)
@@ -467,4 +471,14 @@ def parse_config(
     problem = _problem(src, c, raw, parts, mesh, material, grid, where)
     _check_loads(src, problem)
     title = c.title if c.title is not None else Path(source).stem
-    return Config(path, raw, title, problem, solver, output, mesh_source, c)
+    cycles = None
+    cj = c.time.cycle_jump
+    if cj is not None:
+        if cj.period is not None and abs(cj.period - grid.T) > 1e-12 * max(grid.T, 1.0):
+            raise ConfigError(
+                f"{src}: [time] cycle_jump: period = {cj.period:g} but the time grid (one "
+                f"cycle) ends at T = {grid.T:g}; make them equal"
+            )
+        with at(src, "[time]", raw["time"], key="cycle_jump"):
+            cycles = CycleJump(cj.cycles, cj.jump, cj.max_increment)
+    return Config(path, raw, title, problem, solver, output, mesh_source, c, cycles)

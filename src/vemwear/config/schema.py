@@ -297,21 +297,49 @@ class Vem(Section):
 
 
 # ---------------------------------------------------------------------------- time
-class Steps(Section):
+class CycleJumpTable(Section):
+    """Cycle jumps for a periodic loading: the time grid is one cycle."""
+
+    model_config = ConfigDict(title="{ cycles, jump, period, max_increment }")
+    cycles: int = Field(ge=1, description="number of load cycles N")
+    jump: int = Field(1, ge=1, description="cycles advanced per computed cycle (1: all computed)")
+    period: float | None = Field(
+        None, description="the period P of the loading; must equal T (default: T)"
+    )
+    max_increment: float = Field(
+        0.05,
+        gt=0,
+        le=1,
+        description="largest extrapolated wear per jump, as a fraction of g",
+    )
+
+
+class TimeBase(Section):
+    """Keys of every time grid."""
+
+    cycle_jump: CycleJumpTable | None = Field(
+        None,
+        title="{ cycles, jump, period, max_increment }",
+        description="run N cycles of a periodic loading, the grid being one cycle, "
+        "computing one cycle in every 'jump' and extrapolating the wear between",
+    )
+
+
+class Steps(TimeBase):
     """Uniform."""
 
     T: float = Field(description="final time, > 0")
     steps: int = Field(description="number of equal steps, >= 1")
 
 
-class Dt(Section):
+class Dt(TimeBase):
     """Explicit step sizes."""
 
     T: float | None = Field(None, description="final time; if given, the sum of dt")
     dt: list[float] = Field(description="the step sizes k_0, k_1, ..., each > 0")
 
 
-class Pattern(Section):
+class Pattern(TimeBase):
     """Repeated step sizes."""
 
     T: float = Field(description="final time, > 0")
@@ -320,7 +348,7 @@ class Pattern(Section):
     )
 
 
-class Levels(Section):
+class Levels(TimeBase):
     """Explicit time levels."""
 
     T: float | None = Field(None, description="final time; if given, the last level")

@@ -265,4 +265,7 @@ def write_mesh(mesh: Mesh, path: str | Path, file_format: str | None = None) -> 
         m.cell_data = {"gmsh:physical": phys, "gmsh:geometrical": phys}
         m.field_data = {name: np.array([i + 1, 1]) for i, name in enumerate(mesh.part_names)}
         m.points = m.points.copy()
-    meshio.write(path, m, file_format=fmt)
+    if fmt and fmt.startswith("gmsh"):  # ASCII: readable and portable
+        meshio.write(path, m, file_format=fmt, binary=False)
+    else:
+        meshio.write(path, m, file_format=fmt)
