@@ -93,7 +93,10 @@ def reference_tables() -> dict[str, str]:
     for form, m in s.TIME_FORMS.items():
         for key, t, _, text in _rows(m):
             row = time.setdefault(key, [key, t, "—", ""])
-            row[3] += f"{'; ' * bool(row[3])}with `{form}`: {text}" if key == "`T`" else text
+            if key == "`T`":
+                row[3] += f"{'; ' * bool(row[3])}with `{form}`: {text}"
+            elif text not in row[3]:  # keys of every form (cycle_jump) once
+                row[3] += text
     time["`T`"][2] = f"required with {', '.join(needs_T)}"
     laws = [[f'`"{n}"`', *r] for n, m in s.LAWS.items() for r in _rows(m, ("type",))]
     tables = {
@@ -106,6 +109,7 @@ def reference_tables() -> dict[str, str]:
         "contact.v_star": _table(head, _rows(s.VelocityTable)),
         "time": _table(head, list(time.values())),
         "boundary.displacement": _table(head, _rows(s.DisplacementPart)),
+        "time.cycle_jump": _table(head, _rows(s.CycleJumpTable)),
         "boundary.traction": _table(head, _rows(s.TractionPart)),
     }
     for name in ("boundary", "material", "vem", "loads", "contact", "solver", "output"):

@@ -1,0 +1,184 @@
+"""A user's own problem in a config file: named parts, prescribed displacements, several
+traction and contact parts, initial gap, sliding that follows the geometry, a
+foundation velocity that vanishes."""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from conftest import small_config
+from vemwear.config import ConfigError, parse_config
+from vemwear.simulate import simulate
+
+BASE = tomllib.loads(small_config("parts", steps=8))
+
+
+def parse(data: dict[str, Any]) -> Any:
+    return parse_config(data, source="c.toml", base_dir=Path("."))
+
+
+def variant(**sections: Any) -> dict[str, Any]:
+    d = copy.deepcopy(BASE)
+    for name, keys in sections.items():
+        if keys is None:
+            d.pop(name, None)
+        else:
+            d[name] = keys
+    return d
+
+
+def test_gap_zero_and_tangent_v_star_are_bitwise_the_paper_scheme() -> None:
+    ref = simulate(parse(BASE).problem, "newton")
+    d = copy.deepcopy(BASE)
+    d["contact"]["gap"] = 0.0
+    d["contact"]["on"] = d["boundary"].pop("contact")
+    got = simulate(parse(d).problem, "newton")
+    for name in ("wear", "u_nu", "p_soft", "p_rigid", "u"):
+        assert np.array_equal(getattr(got, name), getattr(ref, name)), name
+
+
+def test_load_on_top_right_side_free_and_rollers() -> None:
+    """'load on top, right side free': each edge in one part, several traction tables."""
+    d = variant(
+        boundary={
+            "clamped": "left",
+            "free": "right",
+            "contact": "bottom",
+            "traction": [
+                {"name": "load", "on": "top", "f2": [0.0, "-0.01*x"]},
+            ],
+        },
+        loads={"f1": [0.0, -0.06]},
+    )
+    pr = parse(d).problem
+    assert pr.mesh.parts == ("clamped", "contact", "free", "load")
+    assert set(pr.tractions) == {"load"}
+    r = simulate(pr, "newton")
+    assert r.wear[-1].max() > 0
+
+
+def test_rollers_and_displacement_control_without_a_clamped_part() -> None:
+    d = variant(
+        boundary={
+            "contact": "bottom",
+            "displacement": [
+                {"name": "rollers", "on": ["left", "right"], "ux": 0.0},
+                {"name": "top", "on": "top", "uy": "-0.05*t"},
+            ],
+        }
+    )
+    d["contact"]["gap"] = 0.01
+    d["contact"]["mu"] = 0.0
+    pr = parse(d).problem
+    assert pr.clamped == () and [p.part for p in pr.displacement] == ["rollers", "top"]
+    r = simulate(pr, "newton")
+    u = r.displacement(-1)
+    assert np.abs(u[:, 0]).max() < 1e-14  # uniaxial
+    top = np.abs(pr.mesh.points[:, 1] - 1.0) < 1e-12
+    assert np.allclose(u[top, 1], -0.05, rtol=0, atol=1e-15)
+    assert np.all(r.penetration[0] < 0)  # the gap is open at t = 0
+
+
+def test_free_rigid_motion_is_named_at_the_boundary_key() -> None:
+    d = variant(
+        boundary={
+            "contact": "bottom",
+            "free": "rest",
+            "displacement": [{"name": "rollers", "on": "left", "ux": 0.0}],
+        }
+    )
+    with pytest.raises(ConfigError, match=r"^c.toml: \[boundary\] the boundary conditions "
+                       r"leave rigid motions free: the translation in y; clamp a part"):
+        parse(d)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (
+            {"boundary": {"clamped": "left", "contact": "bottom", "traction": [
+                {"on": "top", "f2": [0.0, -0.01]}], "free": "right"}},
+            r"\[loads\] f2 is the traction of \[boundary\] traction",
+        ),
+        (
+            {"boundary": {"clamped": "left", "contact": "bottom", "traction": "rest",
+                          "displacement": [{"name": "clamped", "on": "top", "uy": 0.0}]}},
+            r"\[\[boundary.displacement\]\] 1: the part name 'clamped' is taken by "
+            r"\[boundary\] clamped",
+        ),
+        (
+            {"boundary": {"clamped": "left", "contact": "bottom", "traction": "rest",
+                          "displacement": [{"on": "top"}]}},
+            r"\[\[boundary.displacement\]\] 1: give ux, uy or both",
+        ),
+    ],
+)
+def test_part_errors(change: dict[str, Any], message: str) -> None:
+    d = variant(**change)
+    if "traction" in d["boundary"] and isinstance(d["boundary"]["traction"], list):
+        d["loads"]["f2"] = [0.0, 0.0]
+    with pytest.raises(ConfigError, match=message):
+        parse(d)
+
+
+def test_contact_on_and_boundary_contact_both_refused() -> None:
+    d = copy.deepcopy(BASE)
+    d["contact"]["on"] = "bottom"
+    with pytest.raises(ConfigError, match=r"\[contact\] on and \[boundary\] contact both"):
+        parse(d)
+
+
+def test_a_face_the_foundation_moves_against_does_not_wear() -> None:
+    """Contact on the bottom and the right side as one part, v* = (1, 0): the right
+    face (normal (1, 0)) has v*_tau = 0: no wear and no friction there."""
+    d = variant(boundary={"clamped": "left", "traction": "top", "contact": ["bottom", "right"]})
+    d["contact"]["g"] = 0.3
+    d["loads"]["f1"] = [-0.06, -0.06]
+    pr = parse(d).problem
+    r = simulate(pr, "newton")
+    pts = r.contact_points
+    right = (np.abs(pts[:, 0] - 2.0) < 1e-12) & (pts[:, 1] > 1e-12)
+    assert right.sum() == 4 and r.p_soft[:, right].max() > 0  # pressed, yet
+    assert r.wear[-1, right].max() == 0.0  # no wear where the foundation moves normally
+    assert r.wear[-1, ~right].max() > 0
+
+
+def test_reciprocating_foundation_with_levels_on_its_zeros() -> None:
+    """v* = (cos 2 pi t, 0) on 8 steps: levels 2 and 6 are zeros of v*; accepted, and
+    the wear does not grow over those steps."""
+    d = copy.deepcopy(BASE)
+    d["contact"]["v_star"] = ["cos(2*pi*t)", "0"]
+    pr = parse(d).problem
+    r = simulate(pr, "newton")
+    dw = np.diff(r.wear, axis=0)
+    assert np.abs(dw[2]).max() < 1e-17 and np.abs(dw[6]).max() < 1e-17  # |cos| ~ 1e-16
+    assert dw[0].max() > 0 and dw[4].max() > 0
+
+
+def test_two_contact_parts_with_their_own_data() -> None:
+    """A body between two moving foundations: each part its own kappa, v* and gap."""
+    d = variant(
+        boundary={"clamped": "left", "free": "right"},
+        contact=[
+            {"name": "lower", "on": "bottom", "p": {"type": "linear", "c": 0.4}, "g": 0.1,
+             "mu": 0.2, "kappa": 2.0, "v_star": [1.0, 0.0]},
+            {"name": "upper", "on": "top", "p": {"type": "linear", "c": 0.8}, "g": 0.1,
+             "mu": 0.2, "kappa": 0.0, "v_star": [-1.0, 0.0], "gap": 0.001},
+        ],
+        loads={"f1": [0.0, -0.06], "f2": None},
+    )
+    d["loads"].pop("f2", None)
+    pr = parse(d).problem
+    cb = pr.contact
+    assert cb.part_names == ("lower", "upper")
+    assert set(np.unique(pr.nodal["kappa"][cb.part == 1])) == {0.0}
+    assert set(np.unique(pr.nodal["gap"][cb.part == 1])) == {0.001}
+    r = simulate(pr, "newton")
+    assert r.wear[-1, cb.part == 0].max() > 0 and r.wear[-1, cb.part == 1].max() == 0.0
+    assert r.forces is not None and r.force_parts[:2] == (("lower", "contact"), ("upper", "contact"))
