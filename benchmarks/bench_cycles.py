@@ -45,7 +45,9 @@ def linear_jumps(problem, solver, cycles: int, jump: int) -> np.ndarray:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     ap.add_argument("--cycles", type=int, default=100)
     ap.add_argument("--jumps", type=int, nargs="+", default=[5, 10, 20])
     ap.add_argument("--repeat", type=int, default=3)
@@ -80,13 +82,19 @@ def main() -> None:
         return f"{min(v):7.3f} {statistics.median(v):7.3f} {max(v):7.3f}"
 
     print(f"fretting punch, {args.cycles} cycles of {steps} steps; max wear {scale:.6g}")
-    print(f"{'run':>14} | {'computed':>8} | {'rel. diff':>9} | {'linear':>9} | {'wall s (min med max)':>23} | speed-up")
+    print(
+        f"{'run':>14} | {'computed':>8} | {'rel. diff':>9} | {'linear':>9} | {'wall s (min med max)':>23} | speed-up"
+    )
     base = statistics.median(times["whole"])
-    print(f"{'whole history':>14} | {args.cycles:8d} | {0.0:9.2e} | {'':>9} | {st(times['whole']):>23} | {1.0:6.1f}")
+    print(
+        f"{'whole history':>14} | {args.cycles:8d} | {0.0:9.2e} | {'':>9} | {st(times['whole']):>23} | {1.0:6.1f}"
+    )
     for J in cases:
         label = f"jump {J}"
         li = f"{lin[J]:9.2e}" if J in lin else f"{'':>9}"
-        print(f"{label:>14} | {comp[J]:8d} | {err[J]:9.2e} | {li} | {st(times[J]):>23} | {base / statistics.median(times[J]):6.1f}")
+        print(
+            f"{label:>14} | {comp[J]:8d} | {err[J]:9.2e} | {li} | {st(times[J]):>23} | {base / statistics.median(times[J]):6.1f}"
+        )
 
 
 def dataclass_replace_time(problem, grid):

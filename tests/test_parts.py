@@ -93,8 +93,11 @@ def test_free_rigid_motion_is_named_at_the_boundary_key() -> None:
             "displacement": [{"name": "rollers", "on": "left", "ux": 0.0}],
         }
     )
-    with pytest.raises(ConfigError, match=r"^c.toml: \[boundary\] the boundary conditions "
-                       r"leave rigid motions free: the translation in y; clamp a part"):
+    with pytest.raises(
+        ConfigError,
+        match=r"^c.toml: \[boundary\] the boundary conditions "
+        r"leave rigid motions free: the translation in y; clamp a part",
+    ):
         parse(d)
 
 
@@ -102,19 +105,37 @@ def test_free_rigid_motion_is_named_at_the_boundary_key() -> None:
     ("change", "message"),
     [
         (
-            {"boundary": {"clamped": "left", "contact": "bottom", "traction": [
-                {"on": "top", "f2": [0.0, -0.01]}], "free": "right"}},
+            {
+                "boundary": {
+                    "clamped": "left",
+                    "contact": "bottom",
+                    "traction": [{"on": "top", "f2": [0.0, -0.01]}],
+                    "free": "right",
+                }
+            },
             r"\[loads\] f2 is the traction of \[boundary\] traction",
         ),
         (
-            {"boundary": {"clamped": "left", "contact": "bottom", "traction": "rest",
-                          "displacement": [{"name": "clamped", "on": "top", "uy": 0.0}]}},
+            {
+                "boundary": {
+                    "clamped": "left",
+                    "contact": "bottom",
+                    "traction": "rest",
+                    "displacement": [{"name": "clamped", "on": "top", "uy": 0.0}],
+                }
+            },
             r"\[\[boundary.displacement\]\] 1: the part name 'clamped' is taken by "
             r"\[boundary\] clamped",
         ),
         (
-            {"boundary": {"clamped": "left", "contact": "bottom", "traction": "rest",
-                          "displacement": [{"on": "top"}]}},
+            {
+                "boundary": {
+                    "clamped": "left",
+                    "contact": "bottom",
+                    "traction": "rest",
+                    "displacement": [{"on": "top"}],
+                }
+            },
             r"\[\[boundary.displacement\]\] 1: give ux, uy or both",
         ),
     ],
@@ -166,10 +187,25 @@ def test_two_contact_parts_with_their_own_data() -> None:
     d = variant(
         boundary={"clamped": "left", "free": "right"},
         contact=[
-            {"name": "lower", "on": "bottom", "p": {"type": "linear", "c": 0.4}, "g": 0.1,
-             "mu": 0.2, "kappa": 2.0, "v_star": [1.0, 0.0]},
-            {"name": "upper", "on": "top", "p": {"type": "linear", "c": 0.8}, "g": 0.1,
-             "mu": 0.2, "kappa": 0.0, "v_star": [-1.0, 0.0], "gap": 0.001},
+            {
+                "name": "lower",
+                "on": "bottom",
+                "p": {"type": "linear", "c": 0.4},
+                "g": 0.1,
+                "mu": 0.2,
+                "kappa": 2.0,
+                "v_star": [1.0, 0.0],
+            },
+            {
+                "name": "upper",
+                "on": "top",
+                "p": {"type": "linear", "c": 0.8},
+                "g": 0.1,
+                "mu": 0.2,
+                "kappa": 0.0,
+                "v_star": [-1.0, 0.0],
+                "gap": 0.001,
+            },
         ],
         loads={"f1": [0.0, -0.06], "f2": None},
     )
@@ -181,4 +217,7 @@ def test_two_contact_parts_with_their_own_data() -> None:
     assert set(np.unique(pr.nodal["gap"][cb.part == 1])) == {0.001}
     r = simulate(pr, "newton")
     assert r.wear[-1, cb.part == 0].max() > 0 and r.wear[-1, cb.part == 1].max() == 0.0
-    assert r.forces is not None and r.force_parts[:2] == (("lower", "contact"), ("upper", "contact"))
+    assert r.forces is not None and r.force_parts[:2] == (
+        ("lower", "contact"),
+        ("upper", "contact"),
+    )
