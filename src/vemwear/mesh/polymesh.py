@@ -336,7 +336,8 @@ class Mesh:
 
     @property
     def h(self) -> float:
-        """Mesh size: the largest cell diameter."""
+        """Mesh size: the largest cell diameter (the one definition of h in vemwear; the
+        paper's "h = 1/n" of squares is their side, whose diameter is sqrt(2)/n)."""
         return float(self.cell_diameters.max())
 
     def __repr__(self) -> str:

@@ -71,14 +71,13 @@ def smallness_report(problem: Problem, max_dofs: int = 200_000) -> tuple[str, st
 
 def check_rows(cfg: Config) -> Rows:
     """The description of a validated configuration that ``vemwear check`` prints."""
-    from ..mesh import PARTS
     from ..solvers import resolve_backend
 
     pr = cfg.problem
     m = pr.mesh
     cb = pr.contact
     counts = ", ".join(f"{n}-gons: {len(i)}" for n, (i, _) in sorted(m.groups.items()))
-    parts = ", ".join(f"{p} {n}" for p, n in m.part_counts().items() if n or p in PARTS)
+    parts = ", ".join(f"{p} {n}" for p, n in m.part_counts().items() if n)
     k = pr.time.k
     src = cfg.mesh_source
     mesh_from = (
@@ -88,20 +87,42 @@ def check_rows(cfg: Config) -> Rows:
     )
     nodal = pr.nodal
 
-    def rng(name: str) -> str:
-        v = nodal[name]
+    def rng(name: str, sel: np.ndarray) -> str:
+        v = nodal[name][sel]
+        if not v.size:
+            return "-"
         lo, hi = float(v.min()), float(v.max())
         return f"{lo:g}" if lo == hi else f"{lo:g} .. {hi:g}"
 
-    ce = m.part_edges("contact")
-    length = float(np.linalg.norm(m.points[ce[:, 1]] - m.points[ce[:, 0]], axis=1).sum())
-    law = pr.p.describe()
-    if law.get("type") == "linear":
-        p_text = f"p(r) = {law['c']:g} r_+"
-    elif law.get("type") == "table":
-        p_text = f"p: table of {len(law['r'])} points, r up to {law['r'][-1]:g}"
-    else:
-        p_text = f"p: {law}"
+    def law_text(law: dict) -> str:
+        if law.get("type") == "linear":
+            return f"p(r) = {law['c']:g} r_+"
+        if law.get("type") == "table":
+            return f"p: table of {len(law['r'])} points, r up to {law['r'][-1]:g}"
+        return f"p: {law}"
+
+    contact_rows: list[tuple[str, str]] = []
+    edges, lengths = 0, 0.0
+    for i, pc in enumerate(pr.parts):
+        sel = np.asarray(cb.part == i)
+        ce = m.part_edges(pc.part)
+        edges += len(ce)
+        lengths += float(np.linalg.norm(m.points[ce[:, 1]] - m.points[ce[:, 0]], axis=1).sum())
+        gap = f"; gap {rng('gap', sel)}" if np.any(nodal["gap"][sel]) else ""
+        contact_rows.append(
+            (
+                "contact" if len(pr.parts) == 1 else f"contact {pc.part}",
+                f"{law_text(pc.p.describe())}; g {rng('g', sel)}; mu {rng('mu', sel)}; "
+                f"kappa {rng('kappa', sel)}{gap}; v_star {pc.velocity.describe()}",
+            )
+        )
+    con = pr.constraints
+    held = [f"{n} (u = 0)" for n in con.parts[: con.n_clamped]] + [
+        f"{d.part} ("
+        + ", ".join(f"{c} = {v}" for c, v in d.describe().items() if c != "part" and v is not None)
+        + ")"
+        for d in pr.displacement
+    ]
     s = cfg.solver
     return [
         (
@@ -109,7 +130,8 @@ def check_rows(cfg: Config) -> Rows:
             f"{mesh_from}: {m.n_points} vertices, {m.n_cells} cells ({counts}), h = {m.h:.4g}",
         ),
         ("boundary edges", parts),
-        ("contact nodes", f"{cb.m} on {len(ce)} contact edges (Gamma_C length {length:.6g})"),
+        ("held by", "; ".join(held)),
+        ("contact nodes", f"{cb.m} on {edges} contact edges (Gamma_C length {lengths:.6g})"),
         (
             "time levels",
             f"{len(pr.time.t)} on [0, {pr.time.T:g}], "
@@ -120,11 +142,7 @@ def check_rows(cfg: Config) -> Rows:
             f"lam = {pr.material.lam:g}, eta = {pr.material.eta:g}; "
             f"stabilization {pr.stabilization}",
         ),
-        (
-            "contact",
-            f"{p_text}; g {rng('g')}; mu {rng('mu')}; "
-            f"kappa {rng('kappa')}; v_star {pr.v_star.describe()}",  # type: ignore[union-attr]
-        ),
+        *contact_rows,
         (
             "solver",
             f"{s.method}, tol {s.tol:g}, max_iter "
@@ -174,4 +192,19 @@ def result_rows(result: Result) -> Rows:
             if wT.size
             else "-",
         ),
+        *_force_rows(result),
+    ]
+
+
+def _force_rows(result: Result) -> Rows:
+    """The force resultant of every part at T (a row each, when there are several)."""
+    F = result.forces
+    if F is None or not len(F):
+        return []
+    return [
+        (
+            f"force at T: {name}",
+            f"({F[-1, j, 0]:.4g}, {F[-1, j, 1]:.4g})" + (" reaction" if kind == "reaction" else ""),
+        )
+        for j, (name, kind) in enumerate(result.force_parts)
     ]
