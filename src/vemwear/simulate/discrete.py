@@ -31,6 +31,21 @@ class DataError(ValueError):
     """Data that give non-finite numbers (an overflow), named with the quantity."""
 
 
+@dataclasses.dataclass
+class _Reactions:
+    """Operators of the reactions (:meth:`Discretization.resultants`)."""
+
+    Z: NDArray[np.float64]
+    E: sp.csr_matrix
+    ZN: NDArray[np.float64]
+    ZT: NDArray[np.float64]
+    Nc: sp.csr_matrix
+    Tc: sp.csr_matrix
+    F: Any = None
+    ZF: Any = None
+    static: Any = None
+
+
 class Discretization:
     """Everything the time loop needs: K on free dofs, contact operators, nodal data.
 
@@ -86,7 +101,7 @@ class Discretization:
         )
         self._F0: NDArray | None = None
         self._solvers: dict[Any, Any] = {}
-        self._reaction: tuple[NDArray, sp.csr_matrix] | None = None
+        self._reaction: _Reactions | None = None
         self._K_cc = sp.csr_matrix((0, 0))
         self._Fc0: NDArray | None = None
 
@@ -193,17 +208,22 @@ class Discretization:
         np.add.at(out, cb.part, node_force)
         if not con.parts:
             return out
-        Z, E = self._reaction_operators(solver)
-        layer = cb.N.T @ normal + cb.Tau.T @ tangent  # on all dofs
-        u_c = con.values(step.t)
-        rhs = step.F - layer[self.free]
-        r_c = self._K_cc @ u_c - self._F_ext_c(step.t) + layer[con.dofs]
-        out[len(cb.part_names) :] = (Z.T @ rhs + E.T @ r_c).reshape(-1, 2)
+        op = self._reaction_operators(solver)
+        if step.F is not op.F:  # Z^T F once per load vector (a constant load: once)
+            op.F, op.ZF = step.F, op.Z.T @ step.F
+        r_c = op.Nc @ normal + op.Tc @ tangent  # contact forces on constrained components
+        if op.static is None or not self._constant_load:
+            static = self._K_cc @ con.values(step.t) - self._F_ext_c(step.t)
+            op.static = static
+        reaction = op.ZF - op.ZN @ normal - op.ZT @ tangent + op.E.T @ (op.static + r_c)
+        out[len(cb.part_names) :] = reaction.reshape(-1, 2)
         return out
 
-    def _reaction_operators(self, solver: Any) -> tuple[NDArray, sp.csr_matrix]:
+    def _reaction_operators(self, solver: Any) -> _Reactions:
+        """The operators of the reactions, built once: ``Z`` and its products with the
+        contact operators, so that a level costs O(m) besides ``Z^T F`` per load."""
         if self._reaction is None:
-            con = self.constraints
+            con, cb, s = self.constraints, self.contact, self.system
             cols = con.owner * 2 + con.dofs % 2  # (part, component) of each constrained dof
             E = sp.csr_matrix(
                 (np.ones(len(con.dofs)), (np.arange(len(con.dofs)), cols)),
@@ -217,9 +237,17 @@ class Discretization:
             else:
                 import scipy.sparse.linalg as spla
 
-                Z = spla.splu(self.system.K.tocsc()).solve(B)
+                Z = spla.splu(s.K.tocsc()).solve(B)
+            Z = np.asarray(Z).reshape(len(self.free), -1)
             self._K_cc = self.K_full[con.dofs][:, con.dofs].tocsr()
-            self._reaction = (np.asarray(Z).reshape(len(self.free), -1), E)
+            self._reaction = _Reactions(
+                Z=Z,
+                E=E,
+                ZN=np.asarray(s.N @ Z).T,
+                ZT=np.asarray(s.Tau @ Z).T,
+                Nc=cb.N[:, con.dofs].T.tocsr(),
+                Tc=cb.Tau[:, con.dofs].T.tocsr(),
+            )
         return self._reaction
 
     def _F_ext_c(self, t: float) -> NDArray[np.float64]:

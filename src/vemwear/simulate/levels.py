@@ -112,6 +112,13 @@ def run_levels(
     def flush() -> None:
         if not pending:
             return
+        if not batch:  # a resumed run whose pending levels another solver left
+            for n_, _, st, so in pending:
+                full_sol = step_solver.solve(st, so, recover=True)
+                res = np.array([full_sol.residuals[k] for k in RESIDUAL_NAMES])
+                sink.displacement(n_, d.full_displacement(full_sol.u, st.t), res)
+            pending.clear()
+            return
         X = step_solver.recover_many(
             [st for _, _, st, _ in pending],
             [so.p_rigid for *_, so in pending],
@@ -153,7 +160,7 @@ def run_levels(
             now = (n + 1, w_next, sol)
             # blocks at fixed positions among the stored levels: a resumed run recovers
             # the same blocks, so its results are bitwise the same
-            if pending and slot[n] % recover_block == recover_block - 1:
+            if pending and slot[n] >= 0 and slot[n] % recover_block == recover_block - 1:
                 flush()
             if checkpoint > 0 and time.monotonic() - last_checkpoint >= checkpoint:
                 sink.checkpoint(current())
