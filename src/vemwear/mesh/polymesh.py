@@ -193,8 +193,11 @@ class Mesh:
         de = self.directed_edges
         n = max(self.n_points, 1)
         fwd = de[:, 0] * n + de[:, 1]
-        rev = de[:, 1] * n + de[:, 0]
-        is_boundary = ~np.isin(fwd, rev)
+        rev = np.sort(de[:, 1] * n + de[:, 0])
+        # an edge is interior when its reverse is another cell's edge (a sorted search;
+        # several times faster than np.isin on 10^5-10^6 edges)
+        pos = np.minimum(np.searchsorted(rev, fwd), len(rev) - 1)
+        is_boundary = rev[pos] != fwd
         rows = np.flatnonzero(is_boundary)
         # a canonical order (by first vertex, then second) makes tags reproducible
         order = np.lexsort((de[rows, 1], de[rows, 0]))

@@ -36,7 +36,7 @@ class _Reactions:
     """Operators of the reactions (:meth:`Discretization.resultants`)."""
 
     Z: NDArray[np.float64]
-    E: sp.csr_matrix
+    ET: NDArray[np.float64]
     ZN: NDArray[np.float64]
     ZT: NDArray[np.float64]
     Nc: sp.csr_matrix
@@ -102,6 +102,7 @@ class Discretization:
         self._F0: NDArray | None = None
         self._solvers: dict[Any, Any] = {}
         self._reaction: _Reactions | None = None
+        self._vt: tuple[float, NDArray[np.float64]] | None = None
         self._K_cc = sp.csr_matrix((0, 0))
         self._Fc0: NDArray | None = None
 
@@ -167,9 +168,12 @@ class Discretization:
         return F
 
     def tangential_velocity(self, t: float) -> NDArray[np.float64]:
-        """``v*(t) . tau_a`` at every contact node (each part's own v*)."""
-        cb = self.contact
-        return tangential_velocity(self.problem.parts, cb.part, cb.tangents, t)
+        """``v*(t) . tau_a`` at every contact node (each part's own v*); the last time's
+        values are kept (step data and wear rate ask for the same t)."""
+        if self._vt is None or self._vt[0] != t:
+            cb = self.contact
+            self._vt = (t, tangential_velocity(self.problem.parts, cb.part, cb.tangents, t))
+        return self._vt[1]
 
     def step_data(self, level: int, w: NDArray[np.float64]) -> StepData:
         """The step problem of a level with the wear ``w`` (= w^n)."""
@@ -205,7 +209,13 @@ class Discretization:
         tangent = cb.weights * step.fric * p_soft
         node_force = -(normal[:, None] * cb.normals + tangent[:, None] * cb.tangents)
         out = np.zeros((len(cb.part_names) + len(con.parts), 2))
-        np.add.at(out, cb.part, node_force)
+        if len(cb.part_names) == 1:
+            out[0] = node_force.sum(axis=0)
+        else:
+            for c in (0, 1):
+                out[: len(cb.part_names), c] = np.bincount(
+                    cb.part, node_force[:, c], minlength=len(cb.part_names)
+                )
         if not con.parts:
             return out
         op = self._reaction_operators(solver)
@@ -215,7 +225,7 @@ class Discretization:
         if op.static is None or not self._constant_load:
             static = self._K_cc @ con.values(step.t) - self._F_ext_c(step.t)
             op.static = static
-        reaction = op.ZF - op.ZN @ normal - op.ZT @ tangent + op.E.T @ (op.static + r_c)
+        reaction = op.ZF - op.ZN @ normal - op.ZT @ tangent + op.ET @ (op.static + r_c)
         out[len(cb.part_names) :] = reaction.reshape(-1, 2)
         return out
 
@@ -242,7 +252,7 @@ class Discretization:
             self._K_cc = self.K_full[con.dofs][:, con.dofs].tocsr()
             self._reaction = _Reactions(
                 Z=Z,
-                E=E,
+                ET=np.asarray(E.T.todense()),
                 ZN=np.asarray(s.N @ Z).T,
                 ZT=np.asarray(s.Tau @ Z).T,
                 Nc=cb.N[:, con.dofs].T.tocsr(),

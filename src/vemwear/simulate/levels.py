@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from tqdm.auto import tqdm
 
-from ..solvers import StepSolution, kkt_residuals
-from ..solvers.system import StepData, check_converged
+from ..solvers import StepSolution
+from ..solvers.system import StepData, check_converged, kkt_residuals_block
 from .stream import LevelSink, LoopState, Pending, StoragePlan
 
 if TYPE_CHECKING:
@@ -124,8 +124,11 @@ def run_levels(
             [so.p_rigid for *_, so in pending],
             [so.p_soft for *_, so in pending],
         )
+        fulls = kkt_residuals_block(
+            sysm, [st for _, _, st, _ in pending], X, [so.p_rigid for *_, so in pending]
+        )
         for j, (n_, _, st, so) in enumerate(pending):
-            full = kkt_residuals(sysm, st, X[:, j], so.p_rigid)
+            full = fulls[j]
             check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)
             res = np.array([full[k] for k in RESIDUAL_NAMES])
             sink.displacement(n_, d.full_displacement(X[:, j], st.t), res)

@@ -154,12 +154,19 @@ class CondensedNewton:
     ) -> NDArray:
         """Full displacements of several levels with one block solve, shape (nf, len(steps))."""
         s = self.system
-        rhs = np.column_stack(
-            [
-                st.F - s.layer_forces(p_rigid, p_soft, st.fric)
-                for st, p_rigid, p_soft in zip(steps, p_rigids, p_softs, strict=True)
-            ]
-        )
+        k = len(steps)
+        # the right-hand sides F - N^T W (p_soft + p_rigid) - Tau^T W fric p_soft, built
+        # in one Fortran-ordered block (the layout the solvers take, no copies)
+        P = np.empty((s.m, k))
+        Q = np.empty((s.m, k))
+        for j, (st, p_rigid, p_soft) in enumerate(zip(steps, p_rigids, p_softs, strict=True)):
+            P[:, j] = s.weights * (p_soft + p_rigid)
+            Q[:, j] = s.weights * st.fric * p_soft
+        rhs = np.empty((s.n_free, k), order="F")
+        for j, st in enumerate(steps):
+            rhs[:, j] = st.F
+        rhs -= s.N.T @ P
+        rhs -= s.Tau.T @ Q
         return self.factor.solve(rhs)
 
     def solve(

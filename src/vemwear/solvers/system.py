@@ -160,6 +160,40 @@ def kkt_residuals(
     return _residuals(system, system.N @ u, p_rigid, np.abs(r).max(initial=0) / fscale, p_ref)
 
 
+def kkt_residuals_block(
+    system: ContactSystem, steps: list[StepData], X: NDArray, p_rigids: list[NDArray]
+) -> list[dict[str, float]]:
+    """:func:`kkt_residuals` of several levels at once, ``X`` (n_free, k) their
+    displacements: the products with K, N and the contact operators once for the block,
+    the max norms column by column."""
+    k = len(steps)
+    KX = system.K @ X
+    NX = system.N @ X
+    F = np.empty((system.n_free, k), order="F")
+    for j, st in enumerate(steps):
+        F[:, j] = st.F
+    P_rigid = np.column_stack(p_rigids)
+    P_soft = np.column_stack([system.p(NX[:, j] - st.w) for j, st in enumerate(steps)])
+    fric = np.column_stack([st.fric for st in steps])
+    w = system.weights[:, None]
+    force = system.N.T @ (w * (P_soft + P_rigid)) + system.Tau.T @ (w * fric * P_soft)
+    scale = np.maximum.reduce(
+        [np.abs(F).max(axis=0), np.abs(KX).max(axis=0), np.abs(force).max(axis=0)]
+    )
+    KX -= F
+    KX += force  # now the residual of the equation
+    eq = np.abs(KX).max(axis=0) / np.maximum(scale, _TINY)
+    out = []
+    for j in range(k):
+        p_ref = max(
+            float(np.abs(P_rigid[:, j]).max(initial=0)),
+            float(np.abs(P_soft[:, j]).max(initial=0)),
+            _TINY,
+        )
+        out.append(_residuals(system, NX[:, j], P_rigid[:, j], float(eq[j]), p_ref))
+    return out
+
+
 def condensed_residuals(
     system: ContactSystem, y: NDArray, p_rigid: NDArray, R: NDArray
 ) -> dict[str, float]:

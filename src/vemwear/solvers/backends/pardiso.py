@@ -260,7 +260,7 @@ class PardisoSchur:
     def solve(self, b: NDArray[np.float64]) -> NDArray[np.float64]:
         """``K^{-1} b`` for a vector or an (n, k) block of right-hand sides."""
         B, k = _block(b, self.n)
-        X = np.zeros_like(B)
+        X = np.empty_like(B, order="F")  # PARDISO writes every entry
         with solver_threads():
             self._h(33, B, X, k)
         return X[:, 0] if np.ndim(b) == 1 else X

@@ -1,0 +1,263 @@
+"""Whole runs against their floor, measured in the same run on the same matrix.
+
+``--reference``: Example 5.5's reference run in-process (h = k = 1/n, n = 256 by
+default: 263,168 unknowns, 257 levels, u stored at the 65 levels t = i/64), for each
+backend in ``--backends``, interleaved ``--repeat`` times. Reported per run: mesh,
+assembly, setup (ordering, factorization, Schur block), time loop (Newton, recovery of
+u in blocks, resultants) and the whole run; and the floor of the run, measured on the
+same stiffness right after it: assembly + the backend's factorization with its Schur
+block + the block solves the run needs (65 right-hand sides in blocks of 32) + one
+solve for the load. The ratio whole / floor is the overhead of everything else.
+
+``--steps``: the per-level time of the time loop at 32 x 16 cells and 2000 levels
+(store "final"), split into the step solver's solve and the rest (the loop's own
+overhead: step data, sinks, wear update, resultants).
+
+``--subprocess CMD``: whole processes: ``vemwear example 5.5`` and the 1/512 reference
+run, wall time and peak memory of the child.
+
+Usage::
+
+    python benchmarks/bench_speed.py --reference --backends pardiso scipy --repeat 3
+    python benchmarks/bench_speed.py --steps --repeat 5
+    python benchmarks/bench_speed.py --example-5-5 --n512 --repeat 1
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+
+def _problem(n: int, steps: int | None = None):
+    from vemwear.contact import LinearCompliance
+    from vemwear.mesh import rectangle_squares, tag_rectangle
+    from vemwear.simulate import Problem, TimeGrid
+    from vemwear.vem import Material
+
+    mesh = tag_rectangle(rectangle_squares((2.0, 1.0), (2 * n, n)))
+    return Problem(
+        mesh,
+        Material(4.0, 4.0),
+        TimeGrid.uniform(1.0, steps or n),
+        f1=(0.0, -0.06),
+        p=LinearCompliance(0.4),
+        g=0.1,
+        mu=0.2,
+        kappa=2.0,
+        v_star=(1.0, 0.0),
+    )
+
+
+def reference_once(n: int, backend: str) -> dict[str, float]:
+    from vemwear.simulate import SolverOptions, simulate
+    from vemwear.solvers.backends import schur_factorize
+
+    t0 = time.perf_counter()
+    pr = _problem(n)
+    t_mesh = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    d = pr.discrete
+    t_asm = time.perf_counter() - t1
+    store = np.arange(65) / 64
+    t2 = time.perf_counter()
+    r = simulate(pr, SolverOptions("newton", backend=backend), store=store)
+    t_run = time.perf_counter() - t2
+    whole = t_mesh + t_asm + t_run
+    # the floor on the same matrix: factorization + Schur, the block solves, a load solve
+    s = d.system
+    t3 = time.perf_counter()
+    f = schur_factorize(s.K, s.contact_dofs.ravel(), s.dof_points, backend)
+    t_fact = time.perf_counter() - t3
+    B = np.random.default_rng(0).random((s.K.shape[0], 65))
+    t4 = time.perf_counter()
+    f.solve(B[:, :32])
+    f.solve(B[:, 32:64])
+    f.solve(B[:, 64])
+    f.solve(B[:, 0])
+    t_solves = time.perf_counter() - t4
+    floor = t_asm + t_fact + t_solves
+    tm = r.timings
+    return {
+        "mesh": t_mesh,
+        "assembly": t_asm,
+        "setup": tm["setup"],
+        "loop": tm["time_loop"],
+        "whole": whole,
+        "floor": floor,
+        "ratio": whole / floor,
+        "max_wear": float(r.wear[-1].max()),
+    }
+
+
+def _stats(v: list[float]) -> str:
+    return f"{min(v):6.2f} {statistics.median(v):6.2f} {max(v):6.2f}"
+
+
+def reference_table(n: int, backends: list[str], repeat: int) -> None:
+    print(f"Example 5.5 reference, h = k = 1/{n}, u at 65 levels (seconds, min med max)")
+    cols = ["mesh", "assembly", "setup", "loop", "whole", "floor", "ratio"]
+    rows: dict[str, dict[str, list[float]]] = {b: {c: [] for c in cols} for b in backends}
+    wear: dict[str, float] = {}
+    for _ in range(repeat):
+        for b in backends:  # interleaved
+            out = reference_once(n, b)
+            for c in cols:
+                rows[b][c].append(out[c])
+            wear[b] = out["max_wear"]
+    print(f"{'backend':>8} | " + " | ".join(f"{c:>20}" for c in cols))
+    for b in backends:
+        print(f"{b:>8} | " + " | ".join(f"{_stats(rows[b][c]):>20}" for c in cols))
+    if len(wear) > 1:
+        vals = list(wear.values())
+        print(f"max wear at T: {vals[0]:.12g}; backends differ by {max(vals) - min(vals):.1e}")
+
+
+def steps_table(repeat: int) -> None:
+    from vemwear.simulate import SolverOptions, simulate
+
+    pr = _problem(16, steps=2000)
+    opts = SolverOptions("newton", backend="scipy")
+    simulate(pr, opts, store="final")  # assembly and factorization once
+    solver = pr.discrete.step_solver(opts)
+    inner = solver.solve
+    spent = [0.0]
+
+    def timed(*a, **k):
+        t = time.perf_counter()
+        out = inner(*a, **k)
+        spent[0] += time.perf_counter() - t
+        return out
+
+    solver.solve = timed
+    tot, sol, rest = [], [], []
+    for _ in range(repeat):
+        spent[0] = 0.0
+        t = time.perf_counter()
+        simulate(pr, opts, store="final")
+        dt = time.perf_counter() - t
+        L = len(pr.time.t)
+        tot.append(1e3 * dt / L)
+        sol.append(1e3 * spent[0] / L)
+        rest.append(1e3 * (dt - spent[0]) / L)
+    solver.solve = inner
+    print("time loop per level at 32 x 16, 2001 levels (ms, min med max)")
+    print(f"{'whole':>22} | {'step solver':>22} | {'loop overhead':>22}")
+    print(f"{_stats3(tot):>22} | {_stats3(sol):>22} | {_stats3(rest):>22}")
+
+
+def _stats3(v: list[float]) -> str:
+    return f"{min(v):6.3f} {statistics.median(v):6.3f} {max(v):6.3f}"
+
+
+def _child(cmd: list[str]) -> tuple[float, float, int]:
+    t = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", _PEAK, *cmd], capture_output=True, text=True)
+    wall = time.perf_counter() - t
+    if proc.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed: {proc.stderr.strip()[-400:]}")
+    return wall, float(proc.stdout.strip().splitlines()[-1]) / 1024, proc.returncode
+
+
+_PEAK = """
+import resource, sys
+from vemwear.cli.main import main
+code = main(sys.argv[1:])
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+sys.exit(code)
+"""
+
+
+def processes_table(example: bool, n512: bool, repeat: int) -> None:
+    print("whole processes (wall s min med max; peak RSS MB of the child)")
+    with tempfile.TemporaryDirectory() as d:
+        cases: dict[str, list[str]] = {}
+        if example:
+            cases["vemwear example 5.5"] = ["example", "5.5", "-o", f"{d}/ex55", "--force"]
+        if n512:
+            cfg = os.path.join(d, "n512.toml")
+            with open(cfg, "w") as fh:
+                fh.write(_N512)
+            cases["run 1/512 (u at 65 levels)"] = [
+                "run",
+                cfg,
+                "-o",
+                f"{d}/n512",
+                "--force",
+                "--no-progress",
+            ]
+        walls: dict[str, list[float]] = {k: [] for k in cases}
+        peaks: dict[str, float] = {}
+        for _ in range(repeat):
+            for name, cmd in cases.items():
+                w, peak, _ = _child(cmd)
+                walls[name].append(w)
+                peaks[name] = max(peaks.get(name, 0.0), peak)
+        for name in cases:
+            print(f"{name:>28} | {_stats(walls[name]):>20} | {peaks[name]:8.0f} MB")
+
+
+_N512 = (
+    """title = "reference 1/512"
+[mesh]
+generator = "squares"
+size = [2.0, 1.0]
+divisions = [1024, 512]
+[boundary]
+clamped = "left"
+traction = ["top", "right"]
+contact = "bottom"
+[material]
+lam = 4.0
+eta = 4.0
+[loads]
+f1 = [0.0, -0.06]
+[contact]
+p = { type = "linear", c = 0.4 }
+g = 0.1
+mu = 0.2
+kappa = 2.0
+v_star = [1.0, 0.0]
+[time]
+T = 1.0
+steps = 512
+[output]
+figures = false
+vtk = false
+store_u = ["""
+    + ", ".join(f"{i / 64!r}" for i in range(65))
+    + """]
+"""
+)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    ap.add_argument("--reference", action="store_true")
+    ap.add_argument("--n", type=int, default=256)
+    ap.add_argument("--backends", nargs="+", default=["pardiso", "scipy"])
+    ap.add_argument("--steps", action="store_true")
+    ap.add_argument("--example-5-5", action="store_true")
+    ap.add_argument("--n512", action="store_true")
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    print(f"machine: {os.cpu_count()} cores; python {sys.version.split()[0]}")
+    if args.reference:
+        reference_table(args.n, args.backends, args.repeat)
+    if args.steps:
+        steps_table(args.repeat)
+    if args.example_5_5 or args.n512:
+        processes_table(args.example_5_5, args.n512, args.repeat)
+
+
+if __name__ == "__main__":
+    main()
