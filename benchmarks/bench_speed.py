@@ -13,14 +13,17 @@ solve for the load. The ratio whole / floor is the overhead of everything else.
 (store "final"), split into the step solver's solve and the rest (the loop's own
 overhead: step data, sinks, wear update, resultants).
 
-``--subprocess CMD``: whole processes: ``vemwear example 5.5`` and the 1/512 reference
-run, wall time and peak memory of the child.
+``--example-5-5``, ``--n512``, ``--voronoi``: whole processes, wall time and peak memory
+of the child: ``vemwear example 5.5`` (its reference solution computed, not read from a
+cache), the 1/512 reference run (1,050,624 unknowns, 513 levels, u at 65 levels), and
+Example 5.4's mesh B with 100,000 Voronoi cells instead of 2048 (mesh generation, 64
+levels, u at 5 levels; figures and ParaView output off).
 
 Usage::
 
     python benchmarks/bench_speed.py --reference --backends pardiso scipy --repeat 3
     python benchmarks/bench_speed.py --steps --repeat 5
-    python benchmarks/bench_speed.py --example-5-5 --n512 --repeat 1
+    python benchmarks/bench_speed.py --example-5-5 --n512 --voronoi --repeat 2
 """
 
 from __future__ import annotations
@@ -175,12 +178,38 @@ sys.exit(code)
 """
 
 
-def processes_table(example: bool, n512: bool, repeat: int) -> None:
+def processes_table(example: bool, n512: bool, voronoi: bool, repeat: int) -> None:
     print("whole processes (wall s min med max; peak RSS MB of the child)")
     with tempfile.TemporaryDirectory() as d:
         cases: dict[str, list[str]] = {}
         if example:
-            cases["vemwear example 5.5"] = ["example", "5.5", "-o", f"{d}/ex55", "--force"]
+            cases["vemwear example 5.5"] = [
+                "example",
+                "5.5",
+                "-o",
+                f"{d}/ex55",
+                "--force",
+                "--cache",
+                f"{d}/cache-{{i}}",  # a new cache every time: the reference is computed
+            ]
+        if voronoi:
+            from importlib.resources import files
+
+            text = files("vemwear.examples").joinpath("example_5_4_voronoi.toml").read_text()
+            text = text.replace("n_cells = 2048", "n_cells = 100000")
+            text = text.replace("figures = true", "figures = false")
+            text = text.replace("vtk = true", "vtk = false")
+            cfg = os.path.join(d, "voronoi.toml")
+            with open(cfg, "w") as fh:
+                fh.write(text)
+            cases["run Voronoi 100k cells"] = [
+                "run",
+                cfg,
+                "-o",
+                f"{d}/vor",
+                "--force",
+                "--no-progress",
+            ]
         if n512:
             cfg = os.path.join(d, "n512.toml")
             with open(cfg, "w") as fh:
@@ -195,9 +224,9 @@ def processes_table(example: bool, n512: bool, repeat: int) -> None:
             ]
         walls: dict[str, list[float]] = {k: [] for k in cases}
         peaks: dict[str, float] = {}
-        for _ in range(repeat):
+        for i in range(repeat):
             for name, cmd in cases.items():
-                w, peak, _ = _child(cmd)
+                w, peak, _ = _child([c.replace("{i}", str(i)) for c in cmd])
                 walls[name].append(w)
                 peaks[name] = max(peaks.get(name, 0.0), peak)
         for name in cases:
@@ -248,6 +277,7 @@ def main() -> None:
     ap.add_argument("--steps", action="store_true")
     ap.add_argument("--example-5-5", action="store_true")
     ap.add_argument("--n512", action="store_true")
+    ap.add_argument("--voronoi", action="store_true")
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
     print(f"machine: {os.cpu_count()} cores; python {sys.version.split()[0]}")
@@ -255,8 +285,8 @@ def main() -> None:
         reference_table(args.n, args.backends, args.repeat)
     if args.steps:
         steps_table(args.repeat)
-    if args.example_5_5 or args.n512:
-        processes_table(args.example_5_5, args.n512, args.repeat)
+    if args.example_5_5 or args.n512 or args.voronoi:
+        processes_table(args.example_5_5, args.n512, args.voronoi, args.repeat)
 
 
 if __name__ == "__main__":

@@ -13,6 +13,9 @@ from ..mesh.polymesh import Mesh
 from .local import Material, element_matrices
 from .quadrature import GAUSS2, Field, cell_means, eval_field
 
+#: Cells per batch of local matrices in :func:`stiffness`.
+CHUNK = 4096
+
 
 def _dofs(verts: NDArray[np.int64]) -> NDArray[np.int64]:
     """(m, n) vertex ids -> (m, 2n) interleaved dof ids."""
@@ -25,21 +28,29 @@ def _dofs(verts: NDArray[np.int64]) -> NDArray[np.int64]:
 def stiffness(mesh: Mesh, material: Material, stabilization: str = "paper") -> sp.csr_matrix:
     """Assemble the VEM stiffness matrix of ``a_h`` on all ``2 * n_points`` dofs.
 
-    Local matrices are built group by group (cells of equal vertex count) and
+    Local matrices are built group by group (cells of equal vertex count), in chunks of
+    :data:`CHUNK` cells so that the batched temporaries stay small and are reused
+    (fresh arrays of hundreds of MB cost more in page faults than the arithmetic), and
     scattered once into a COO matrix.
     """
-    rows, cols, vals = [], [], []
     ndof = 2 * mesh.n_points
     index = np.int32 if ndof < 2**31 - 1 else np.int64  # less memory traffic in the scatter
-    for _n, (_ids, verts) in mesh.groups.items():
-        K, _B, _P, _a = element_matrices(mesh.points[verts], material, stabilization)
-        d = _dofs(verts).astype(index)
-        rows.append(np.repeat(d, d.shape[1], axis=1).ravel())
-        cols.append(np.tile(d, (1, d.shape[1])).ravel())
-        vals.append(K.ravel())
-    A = sp.coo_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(ndof, ndof)
-    ).tocsr()
+    total = sum(len(verts) * (2 * n) ** 2 for n, (_ids, verts) in mesh.groups.items())
+    rows, cols = np.empty(total, dtype=index), np.empty(total, dtype=index)
+    vals = np.empty(total)  # filled in place: no concatenation of the groups
+    at = 0
+    for n, (_ids, verts) in mesh.groups.items():
+        n2 = 2 * n
+        for a in range(0, len(verts), CHUNK):
+            v = verts[a : a + CHUNK]
+            size = len(v) * n2 * n2
+            K = element_matrices(mesh.points[v], material, stabilization)[0]
+            vals[at : at + size] = K.ravel()
+            d = _dofs(v).astype(index)
+            rows[at : at + size] = np.repeat(d, n2, axis=1).ravel()
+            cols[at : at + size] = np.tile(d, (1, n2)).ravel()
+            at += size
+    A = sp.coo_matrix((vals, (rows, cols)), shape=(ndof, ndof)).tocsr()
     A.sum_duplicates()
     return A
 
