@@ -212,3 +212,51 @@ def test_condensed_certificate_matches_its_definition(small):
         ref = condensed_residuals(s, y, p_rigid, R)
         assert np.allclose(fast, [ref[k] for k in RESIDUAL_NAMES], rtol=1e-14, atol=0)
         assert ref["feasibility"] <= ref["complementarity"]
+
+
+def test_block_equilibrium_check_estimates_and_catches_a_wrong_column():
+    """The randomized equilibrium check of a recovered block (Freivalds) against the exact
+    backward errors level by level: on a correct block both are at rounding level and
+    the estimate is within the documented factors; one column off by 1e-6 of u (a wrong
+    back-substitution) is caught, whichever column it is."""
+    from vemwear.solvers.system import kkt_residuals, kkt_residuals_block
+
+    pr = paper_problem(steps=12)
+    d = pr.discrete
+    s = d.system
+    solver = d.step_solver(SolverOptions("newton"))
+    w = np.zeros(s.m)
+    steps, sols = [], []
+    guess = None
+    for n in range(len(pr.time.t)):
+        st = d.step_data(n, w)
+        sol = solver.solve(st, guess, recover=False)
+        steps.append(st)
+        sols.append(sol)
+        w = w + 1.0 / 12 * d.alpha(st.t) * sol.p_soft
+        guess = sol
+    X = solver.recover_many(steps, [x.p_rigid for x in sols], [x.p_soft for x in sols])
+    rig = [x.p_rigid for x in sols]
+    K_norm = float(abs(s.K).sum(axis=1).max())
+
+    def backward_error(j: int, x: np.ndarray) -> float:
+        force, _ = s.contact_force(x, rig[j], steps[j].fric, steps[j].w)
+        r = s.K @ x - steps[j].F + force
+        scale = max(np.abs(steps[j].F).max(), np.abs(force).max(), K_norm * np.abs(x).max())
+        return float(np.abs(r).max() / scale)
+
+    block = kkt_residuals_block(s, steps, X, rig)
+    est = block[0]["equilibrium"]
+    assert all(r["equilibrium"] == est for r in block)  # one estimate for the block
+    exact = max(backward_error(j, X[:, j]) for j in range(len(steps)))
+    assert exact < 1e-14 and est < 1e-13
+    for j in range(len(steps)):  # feasibility and complementarity are exact
+        full = kkt_residuals(s, steps[j], X[:, j], rig[j])
+        for key in ("feasibility", "complementarity"):
+            assert block[j][key] == pytest.approx(full[key], abs=1e-15)
+    for bad in (0, 5, len(steps) - 1):  # a wrong column is caught
+        Y = X.copy()
+        Y[:, bad] += 1e-6 * np.abs(X[:, bad]).max() * np.cos(np.arange(len(Y)))
+        true = backward_error(bad, Y[:, bad])
+        got = kkt_residuals_block(s, steps, Y, rig)[0]["equilibrium"]
+        assert true > 1e-8 and true / 100 < got < true * len(steps), (bad, true, got)

@@ -273,7 +273,8 @@ def summarize(result: Result) -> dict[str, Any]:
     pen = np.asarray(result.penetration)[:c]
     u_nu = np.asarray(result.u_nu)[:c]
     weights = np.asarray(result.problem.contact.weights)
-    unorm = np.linalg.norm(result.u, axis=-1)  # (S, n)
+    u = np.asarray(result.u)
+    usq = np.einsum("...i,...i->...", u, u)  # (S, n) squared lengths, no (S, n, 2) temporaries
     a = int(np.argmax(wear_T)) if wear_T.size else 0
     nodal = result.problem.nodal
     active = np.asarray(nodal["g"] + nodal["gap"]) - np.asarray(result.u_nu[last])
@@ -289,8 +290,8 @@ def summarize(result: Result) -> dict[str, Any]:
         "penetration_max_final": _max(pen[-1]) if c else float("nan"),
         "lam_max": _max(np.asarray(result.p_rigid)[:c]),
         "p_max": _max(np.asarray(result.p_soft)[:c]),
-        "displacement_max": _max(unorm),
-        "displacement_max_final": _max(unorm[-1]) if len(unorm) else float("nan"),
+        "displacement_max": float(np.sqrt(_max(usq))),
+        "displacement_max_final": float(np.sqrt(_max(usq[-1]))) if len(usq) else float("nan"),
         "nodes_in_contact_final": int(np.sum(pen[-1] > 0)) if c else 0,
         "nodes_on_rigid_layer_final": int(np.sum(active <= 1e-9 * g_scale)),
     }
@@ -444,6 +445,7 @@ def result_from_arrays(
     data: Mapping[str, NDArray[Any]],
     *,
     solver: Mapping[str, Any] | None = None,
+    copy: bool = True,
 ) -> Result:
     """Rebuild a :class:`~vemwear.simulate.Result` of ``problem`` from saved arrays.
 
@@ -458,6 +460,9 @@ def result_from_arrays(
         The output of :func:`load_result` (a complete or a partial result).
     solver : mapping, optional
         Stored as ``Result.solver`` (e.g. the ``solver`` of ``summary.json``).
+    copy : bool
+        Copy the arrays (default); ``False`` hands arrays read for this call over to
+        the result (the displacements of a large run are hundreds of MB).
 
     Returns
     -------
@@ -541,23 +546,27 @@ def result_from_arrays(
             f"saved result: inconsistent 'completed' = {completed} "
             f"(levels {L}, stored displacement levels {u_levels.tolist()[:5]})"
         )
+
+    def own(a: NDArray[Any]) -> NDArray[Any]:
+        return a.copy() if copy else a
+
     return Result(
         problem=problem,
-        t=t.copy(),
-        points=pts.copy(),
-        u=u.copy(),
-        contact_nodes=cn.copy(),
-        contact_s=np.asarray(data["contact_s"], dtype=np.float64).copy(),
-        contact_points=np.asarray(data["contact_points"], dtype=np.float64).copy(),
-        wear=np.asarray(data["wear"], dtype=np.float64).copy(),
-        u_nu=np.asarray(data["u_nu"], dtype=np.float64).copy(),
-        p_rigid=np.asarray(data["lam"], dtype=np.float64).copy(),
-        p_soft=np.asarray(data["p"], dtype=np.float64).copy(),
-        iterations=np.asarray(data["iterations"], dtype=np.int64).copy(),
-        residuals=np.asarray(data["residuals"], dtype=np.float64).copy(),
-        u_levels=u_levels.copy(),
+        t=own(t),
+        points=own(pts),
+        u=own(u),
+        contact_nodes=own(cn),
+        contact_s=own(np.asarray(data["contact_s"], dtype=np.float64)),
+        contact_points=own(np.asarray(data["contact_points"], dtype=np.float64)),
+        wear=own(np.asarray(data["wear"], dtype=np.float64)),
+        u_nu=own(np.asarray(data["u_nu"], dtype=np.float64)),
+        p_rigid=own(np.asarray(data["lam"], dtype=np.float64)),
+        p_soft=own(np.asarray(data["p"], dtype=np.float64)),
+        iterations=own(np.asarray(data["iterations"], dtype=np.int64)),
+        residuals=own(np.asarray(data["residuals"], dtype=np.float64)),
+        u_levels=own(u_levels),
         completed=completed,
         solver=dict(solver or {}),
-        levels=levels.copy(),
-        forces=np.asarray(data["forces"], dtype=np.float64).copy() if "forces" in data else None,
+        levels=own(levels),
+        forces=own(np.asarray(data["forces"], dtype=np.float64)) if "forces" in data else None,
     )

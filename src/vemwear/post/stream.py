@@ -237,7 +237,7 @@ def result_from_stream(
     problem: Problem, path: str | os.PathLike[str], *, solver: dict[str, Any] | None = None
 ) -> Result:
     """The :class:`~vemwear.simulate.Result` held by a closed ``result.h5``, in memory."""
-    return result_from_arrays(problem, read_stream(path), solver=solver)
+    return result_from_arrays(problem, read_stream(path), solver=solver, copy=False)
 
 
 def stream_bytes(path: str | os.PathLike[str]) -> int:

@@ -137,6 +137,11 @@ class CondensedNewton:
         self._reduced: _ReducedMatrix | None = None
         self._F: NDArray | None = None
         self._d: NDArray | None = None
+        # N^T and Tau^T restricted to the contact dofs, for the right-hand sides of
+        # the recovery
+        self._contact_cols = np.unique(np.concatenate([system.N.indices, system.Tau.indices]))
+        self._NT = system.N[:, self._contact_cols].T.tocsr()
+        self._TT = system.Tau[:, self._contact_cols].T.tocsr()
         # large dense products and LU factorizations run with one BLAS pool
         self._threads = solver_threads if m >= 128 else contextlib.nullcontext
 
@@ -165,8 +170,9 @@ class CondensedNewton:
         rhs = np.empty((s.n_free, k), order="F")
         for j, st in enumerate(steps):
             rhs[:, j] = st.F
-        rhs -= s.N.T @ P
-        rhs -= s.Tau.T @ Q
+        # N and Tau act on the contact dofs only: (2m, k) products, not (n, k) ones
+        dofs = self._contact_cols
+        rhs[dofs] -= self._NT @ P + self._TT @ Q
         return self.factor.solve(rhs)
 
     def solve(
