@@ -3,7 +3,7 @@
 Part 1, memory: ``vemwear run`` on 32 x 16 squares (the paper's data) with
 ``[output] store_u = "final"``, no figures and no ParaView output, for each number of
 steps in ``--steps``; each run is a separate process and its peak resident memory
-(``ru_maxrss`` of the child) is reported when the time loop ends and at the end of the
+(``VmHWM`` of the child) is reported when the time loop ends and at the end of the
 run (which writes ``result.npz`` and the summary from ``result.h5`` in memory), with the
 size of ``result.h5``. The floor is
 the same process importing vemwear and building the problem without solving (steps =
@@ -90,17 +90,18 @@ def _run(config: str, tmp: Path) -> tuple[float, float, float, int]:
 # when the time loop has ended (before result.npz and the summary are written from
 # result.h5) and once at the end.
 _CHILD = """
-import resource, sys
+import sys
+from vemwear.util.system import peak_memory
 import vemwear.runner.run as run
 from vemwear.cli.main import main
 peak = []
 finish = run._finish
 def _finish(*args, **kwargs):
-    peak.append(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+    peak.append((peak_memory() // 1024))
     return finish(*args, **kwargs)
 run._finish = _finish
 code = main(["run", sys.argv[1], "-o", sys.argv[2], "--no-progress"])
-print(peak[0], resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+print(peak[0], (peak_memory() // 1024))
 sys.exit(code)
 """
 

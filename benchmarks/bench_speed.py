@@ -170,10 +170,11 @@ def _child(cmd: list[str]) -> tuple[float, float, int]:
 
 
 _PEAK = """
-import resource, sys
+import sys
+from vemwear.util.system import peak_memory
 from vemwear.cli.main import main
 code = main(sys.argv[1:])
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+print((peak_memory() // 1024))
 sys.exit(code)
 """
 

@@ -6,7 +6,7 @@ import os
 import shutil
 from pathlib import Path
 
-__all__ = ["available_memory", "free_disk", "resident_memory"]
+__all__ = ["available_memory", "free_disk", "peak_memory", "resident_memory"]
 
 
 def available_memory() -> int:
@@ -33,19 +33,39 @@ def free_disk(path: str | os.PathLike[str]) -> int:
     return shutil.disk_usage(p).free
 
 
-def resident_memory() -> int:
-    """Bytes of memory this process holds now (Linux ``VmRSS``; elsewhere its peak
-    resident size, or 0 if unknown)."""
+def _status(key: str) -> int | None:
+    """A size from ``/proc/self/status`` in bytes (Linux), or None."""
     try:
         with open("/proc/self/status", encoding="ascii") as fh:
             for line in fh:
-                if line.startswith("VmRSS:"):
+                if line.startswith(key + ":"):
                     return int(line.split()[1]) * 1024
     except (OSError, ValueError, IndexError):
         pass
+    return None
+
+
+def _maxrss() -> int:
     try:
         import resource
 
         return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
     except (ImportError, OSError):
         return 0
+
+
+def resident_memory() -> int:
+    """Bytes of memory this process holds now (Linux ``VmRSS``; elsewhere its peak
+    resident size, or 0 if unknown)."""
+    now = _status("VmRSS")
+    return _maxrss() if now is None else now
+
+
+def peak_memory() -> int:
+    """Peak bytes of memory this process has held (Linux ``VmHWM``).
+
+    Not ``ru_maxrss``: Linux carries that across ``execve``, so a child started by a
+    large parent (a test runner) reports the parent's size as its own peak.
+    """
+    peak = _status("VmHWM")
+    return _maxrss() if peak is None else peak
