@@ -16,7 +16,6 @@ import pytest
 import scipy.sparse.linalg as spla
 
 from vemwear.cli.main import main
-from vemwear.cli.mesh_cmd import generate_mesh
 from vemwear.config import load_config
 from vemwear.mesh import (
     Mesh,
@@ -27,7 +26,7 @@ from vemwear.mesh import (
     voronoi_mesh,
 )
 from vemwear.mesh.quality import hanging_nodes
-from vemwear.mesh.registry import FAMILIES
+from vemwear.mesh.registry import FAMILIES, generate_mesh
 from vemwear.paper import EXAMPLES, ex54, load_example
 from vemwear.simulate import SolverOptions, simulate
 from vemwear.vem import STABILIZATIONS, Material, Projection, stiffness

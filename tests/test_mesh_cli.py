@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from vemwear.cli.main import main
-from vemwear.cli.mesh_cmd import generate_mesh
 from vemwear.mesh import (
     PARTS,
     Mesh,
@@ -27,7 +26,7 @@ from vemwear.mesh import (
     write_mesh,
 )
 from vemwear.mesh.quality import hanging_nodes
-from vemwear.mesh.registry import FAMILIES
+from vemwear.mesh.registry import FAMILIES, generate_mesh
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -8,7 +8,7 @@ error, 2 invalid input (configuration, mesh, data, output directory, command lin
 
 Only the parser of the chosen subcommand is filled in, and the library is imported
 when a command runs, so that ``vemwear --help`` and ``--version`` start fast.
-Its length (a little over 500 lines) is the arguments and help texts of every
+Its length (about 650 lines) is the arguments and help texts of every
 subcommand: one job, kept in one place so that the command table reads at a glance.
 """
 
@@ -551,7 +551,9 @@ def cmd_manufactured(args: argparse.Namespace) -> int:
     rows = convergence_study(fams, levels=args.levels, n0=args.n0)
     print(table_text(rows, markdown=args.markdown), end="")
     if args.csv:
-        Path(args.csv).write_text(table_csv(rows), encoding="utf-8")
+        from ..util.atomic import write_atomic
+
+        write_atomic(args.csv, table_csv(rows))
     sys.stdout.flush()
     say(
         f"{PROG}: manufactured: {len(fams)} families x {args.levels} levels in "

@@ -24,7 +24,8 @@ file is replaced only with ``--force``. Invalid input is reported as one line an
 exit code 2, as for the other commands (:mod:`vemwear.cli.main`).
 
 The module is one job, the arguments and output of the four ``mesh`` subcommands;
-the work itself is in :mod:`vemwear.mesh`.
+the work itself is in :mod:`vemwear.mesh` (generation:
+:func:`vemwear.mesh.registry.generate_mesh`).
 """
 
 from __future__ import annotations
@@ -34,7 +35,6 @@ import ast
 import contextlib
 import io
 import json
-import math
 import os
 import sys
 from collections.abc import Iterator, Mapping, Sequence
@@ -57,7 +57,6 @@ if TYPE_CHECKING:
 __all__ = [
     "MESH_SUFFIXES",
     "SUMMARY",
-    "generate_mesh",
     "load_mesh",
     "save_mesh",
     "setup",
@@ -73,34 +72,6 @@ MESH_SUFFIXES: dict[str, str] = {
 }
 
 
-# ---------------------------------------------------------------------------- families
-def _divisions_for(n: int, per: int, size: tuple[float, float], family: str) -> tuple[int, int]:
-    """Grid ``(nx, ny)`` with ``per * nx * ny == n`` whose rectangles are closest to squares."""
-    from ..mesh import MeshError
-
-    if n < 1 or n % per:
-        raise MeshError(
-            f"--cells {n}: family {family!r} has {per} cells per grid rectangle, "
-            f"so the count must be a positive multiple of {per}"
-        )
-    m = n // per
-    lx, ly = size
-    small = [d for d in range(1, math.isqrt(m) + 1) if m % d == 0]
-    best = min(
-        {*small, *(m // d for d in small)},
-        key=lambda nx: abs(math.log((lx / nx) / (ly / (m // nx)))),
-    )
-    nx, ny = best, m // best
-    ratio = max((lx / nx) / (ly / ny), (ly / ny) / (lx / nx))
-    if ratio > 2.0 + 1e-12:
-        raise MeshError(
-            f"--cells {n}: the closest grid for family {family!r} on a {lx:g} x {ly:g} "
-            f"rectangle is {nx} x {ny}, whose cells have aspect ratio {ratio:.3g} > 2; "
-            "choose another count or give --divisions NX NY"
-        )
-    return nx, ny
-
-
 def _parse_param(text: str) -> tuple[str, Any]:
     """``NAME=VALUE`` with a Python literal value (a bare word is a string)."""
     from ..mesh import MeshError
@@ -113,117 +84,6 @@ def _parse_param(text: str) -> tuple[str, Any]:
         return name, ast.literal_eval(value.strip())
     except (ValueError, SyntaxError):
         return name, value.strip()
-
-
-def generate_mesh(
-    family: str,
-    *,
-    size: Sequence[float] = (2.0, 1.0),
-    cells: int | None = None,
-    divisions: Sequence[int] | None = None,
-    seed: int | None = None,
-    params: Mapping[str, Any] | None = None,
-    refine_contact: int = 0,
-    boundary: str = "paper",
-) -> Mesh:
-    """Generate a mesh of the rectangle ``[0, lx] x [0, ly]`` of a mesh family.
-
-    Parameters
-    ----------
-    family : str
-        A key of :data:`vemwear.mesh.registry.FAMILIES`.
-    size : (lx, ly)
-        Side lengths (default: the paper's ``(2, 1)``).
-    cells : int, optional
-        Number of cells: exact for ``voronoi``; for grid families (squares, triangles,
-        distorted, nonconvex) the grid with that many cells whose rectangles are
-        closest to squares (aspect ratio at most 2).
-    divisions : (nx, ny), optional
-        Grid divisions (not for ``voronoi``). Without ``cells`` and ``divisions``
-        the generator's defaults apply.
-    seed : int, optional
-        Random seed (``voronoi``, ``distorted``, ``hanging`` with
-        ``params={"pattern": "random"}``).
-    params : mapping, optional
-        Further keyword arguments of the generator (e.g. ``amplitude`` of
-        ``distorted``, ``pattern`` of ``hanging``, ``diagonal`` of ``triangles``).
-    refine_contact : int
-        Refine the cells along the contact part this many times
-        (:func:`vemwear.mesh.refine_along`; needs ``boundary="paper"``).
-    boundary : {"paper", "none"}
-        ``paper``: clamped = left, traction = top and right, contact = bottom
-        (paper Section 5, :func:`vemwear.mesh.tag_rectangle`); ``none``: untagged.
-
-    Returns
-    -------
-    Mesh
-
-    Raises
-    ------
-    MeshError
-        For an unknown family, arguments the family does not take, or a generator
-        that rejects its arguments (the message says which).
-    """
-    from ..mesh import MeshError, refine_along, tag_rectangle
-    from ..mesh.registry import FAMILIES
-
-    if family not in FAMILIES:
-        raise MeshError(f"unknown mesh family {family!r}; available: {', '.join(FAMILIES)}")
-    fam = FAMILIES[family]
-    takes = {o.name for o in fam.options}
-    if boundary not in ("paper", "none"):
-        raise MeshError(f"--boundary must be 'paper' or 'none', got {boundary!r}")
-    lx, ly = (float(s) for s in size)
-    if not (lx > 0 and ly > 0 and math.isfinite(lx) and math.isfinite(ly)):
-        raise MeshError(f"--size must be two positive numbers, got {lx:g} {ly:g}")
-    if refine_contact < 0:
-        raise MeshError(f"--refine-contact must be >= 0, got {refine_contact}")
-    if refine_contact and boundary != "paper":
-        raise MeshError("--refine-contact needs the boundary parts (--boundary paper)")
-    kwargs: dict[str, Any] = {"size": (lx, ly)}
-    if cells is not None and divisions is not None:
-        raise MeshError("give either --cells or --divisions, not both")
-    if cells is not None:
-        if "n_cells" in takes:
-            if cells < 1:
-                raise MeshError(f"--cells must be >= 1, got {cells}")
-            kwargs["n_cells"] = int(cells)
-        elif fam.cells_per_division:
-            kwargs["divisions"] = _divisions_for(
-                int(cells), fam.cells_per_division, (lx, ly), family
-            )
-        else:
-            raise MeshError(
-                f"family {family!r} does not take --cells (its cell count "
-                "follows from the divisions); give --divisions NX NY"
-            )
-    if divisions is not None:
-        if "divisions" not in takes:
-            raise MeshError(f"family {family!r} does not take --divisions; give --cells N")
-        nx, ny = (int(d) for d in divisions)
-        if nx < 1 or ny < 1:
-            raise MeshError(f"--divisions must be positive integers, got {nx} {ny}")
-        kwargs["divisions"] = (nx, ny)
-    if seed is not None:
-        if "seed" not in takes:
-            raise MeshError(f"family {family!r} is deterministic: --seed does not apply")
-        kwargs["seed"] = int(seed)
-    for key, value in (params or {}).items():
-        if key in ("n_cells", "divisions", "seed", "size"):
-            raise MeshError(f"--param {key}: use the option --{key.replace('n_', '')} instead")
-        kwargs[key] = value
-    try:
-        mesh = fam.generate(**kwargs)
-    except (TypeError, ValueError) as exc:
-        msg = str(exc)
-        raise MeshError(
-            f"--param {msg}" if msg.startswith(tuple(params or ())) else f"family {family!r}: {msg}"
-        ) from exc
-    if boundary == "paper":
-        mesh = tag_rectangle(mesh)
-    if refine_contact:
-        mesh = refine_along(mesh, "contact", int(refine_contact))
-    return mesh
 
 
 # ---------------------------------------------------------------------------- reading and writing
@@ -354,6 +214,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
     from ..mesh.checks import check_cells, check_conforming, check_vertices
     from ..mesh.quality import hanging_nodes
+    from ..mesh.registry import generate_mesh
 
     out = _check_target(Path(args.output), args.force, tuple(MESH_SUFFIXES))
     params = dict(_parse_param(t) for t in args.param or ())

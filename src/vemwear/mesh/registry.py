@@ -8,12 +8,15 @@ configuration schema builds the keys of ``[mesh] generator = NAME`` from
 ``--cells``, ``--divisions``, ``--seed`` and ``--param`` options. Defaults are those of
 the generator functions' signatures. Option types are Python annotations (tuples for
 fixed-size arrays, ``Literal`` for choices); values are checked by the generators.
+:func:`generate_mesh` turns a family and a cell count or grid into a tagged mesh of a
+rectangle (the work behind ``vemwear mesh generate``).
 """
 
 from __future__ import annotations
 
 import difflib
 import inspect
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -22,10 +25,10 @@ from numpy.typing import ArrayLike
 
 from .families import distorted_quads, hexagons, nonconvex_mesh, squares_with_hanging_nodes
 from .generate import rectangle_squares, rectangle_triangles
-from .polymesh import Mesh
+from .polymesh import Mesh, MeshError
 from .voronoi import rectangle_domain, voronoi_from_seeds, voronoi_mesh
 
-__all__ = ["FAMILIES", "Family", "Option", "family", "voronoi"]
+__all__ = ["FAMILIES", "Family", "Option", "family", "generate_mesh", "voronoi"]
 
 Pair = tuple[float, float]
 Counts = tuple[int, int]
@@ -292,3 +295,140 @@ def family(name: str) -> Family:
             f"{name!r} is not a known mesh family; {hint}available: {', '.join(FAMILIES)}"
         )
     return _BY_NAME[name]
+
+
+# ---------------------------------------------------------------------------- a rectangle
+def _divisions_for(n: int, per: int, size: tuple[float, float], family: str) -> tuple[int, int]:
+    """Grid ``(nx, ny)`` with ``per * nx * ny == n`` whose rectangles are closest to squares."""
+    if n < 1 or n % per:
+        raise MeshError(
+            f"--cells {n}: family {family!r} has {per} cells per grid rectangle, "
+            f"so the count must be a positive multiple of {per}"
+        )
+    m = n // per
+    lx, ly = size
+    small = [d for d in range(1, math.isqrt(m) + 1) if m % d == 0]
+    best = min(
+        {*small, *(m // d for d in small)},
+        key=lambda nx: abs(math.log((lx / nx) / (ly / (m // nx)))),
+    )
+    nx, ny = best, m // best
+    ratio = max((lx / nx) / (ly / ny), (ly / ny) / (lx / nx))
+    if ratio > 2.0 + 1e-12:
+        raise MeshError(
+            f"--cells {n}: the closest grid for family {family!r} on a {lx:g} x {ly:g} "
+            f"rectangle is {nx} x {ny}, whose cells have aspect ratio {ratio:.3g} > 2; "
+            "choose another count or give --divisions NX NY"
+        )
+    return nx, ny
+
+
+def generate_mesh(
+    family: str,
+    *,
+    size: Sequence[float] = (2.0, 1.0),
+    cells: int | None = None,
+    divisions: Sequence[int] | None = None,
+    seed: int | None = None,
+    params: Mapping[str, Any] | None = None,
+    refine_contact: int = 0,
+    boundary: str = "paper",
+) -> Mesh:
+    """Generate a mesh of the rectangle ``[0, lx] x [0, ly]`` of a mesh family.
+
+    Parameters
+    ----------
+    family : str
+        A key of :data:`vemwear.mesh.registry.FAMILIES`.
+    size : (lx, ly)
+        Side lengths (default: the paper's ``(2, 1)``).
+    cells : int, optional
+        Number of cells: exact for ``voronoi``; for grid families (squares, triangles,
+        distorted, nonconvex) the grid with that many cells whose rectangles are
+        closest to squares (aspect ratio at most 2).
+    divisions : (nx, ny), optional
+        Grid divisions (not for ``voronoi``). Without ``cells`` and ``divisions``
+        the generator's defaults apply.
+    seed : int, optional
+        Random seed (``voronoi``, ``distorted``, ``hanging`` with
+        ``params={"pattern": "random"}``).
+    params : mapping, optional
+        Further keyword arguments of the generator (e.g. ``amplitude`` of
+        ``distorted``, ``pattern`` of ``hanging``, ``diagonal`` of ``triangles``).
+    refine_contact : int
+        Refine the cells along the contact part this many times
+        (:func:`vemwear.mesh.refine_along`; needs ``boundary="paper"``).
+    boundary : {"paper", "none"}
+        ``paper``: clamped = left, traction = top and right, contact = bottom
+        (paper Section 5, :func:`vemwear.mesh.tag_rectangle`); ``none``: untagged.
+
+    Returns
+    -------
+    Mesh
+
+    Raises
+    ------
+    MeshError
+        For an unknown family, arguments the family does not take, or a generator
+        that rejects its arguments (the message says which).
+    """
+    from .boundary import tag_rectangle
+    from .refine import refine_along
+
+    if family not in FAMILIES:
+        raise MeshError(f"unknown mesh family {family!r}; available: {', '.join(FAMILIES)}")
+    fam = FAMILIES[family]
+    takes = {o.name for o in fam.options}
+    if boundary not in ("paper", "none"):
+        raise MeshError(f"--boundary must be 'paper' or 'none', got {boundary!r}")
+    lx, ly = (float(s) for s in size)
+    if not (lx > 0 and ly > 0 and math.isfinite(lx) and math.isfinite(ly)):
+        raise MeshError(f"--size must be two positive numbers, got {lx:g} {ly:g}")
+    if refine_contact < 0:
+        raise MeshError(f"--refine-contact must be >= 0, got {refine_contact}")
+    if refine_contact and boundary != "paper":
+        raise MeshError("--refine-contact needs the boundary parts (--boundary paper)")
+    kwargs: dict[str, Any] = {"size": (lx, ly)}
+    if cells is not None and divisions is not None:
+        raise MeshError("give either --cells or --divisions, not both")
+    if cells is not None:
+        if "n_cells" in takes:
+            if cells < 1:
+                raise MeshError(f"--cells must be >= 1, got {cells}")
+            kwargs["n_cells"] = int(cells)
+        elif fam.cells_per_division:
+            kwargs["divisions"] = _divisions_for(
+                int(cells), fam.cells_per_division, (lx, ly), family
+            )
+        else:
+            raise MeshError(
+                f"family {family!r} does not take --cells (its cell count "
+                "follows from the divisions); give --divisions NX NY"
+            )
+    if divisions is not None:
+        if "divisions" not in takes:
+            raise MeshError(f"family {family!r} does not take --divisions; give --cells N")
+        nx, ny = (int(d) for d in divisions)
+        if nx < 1 or ny < 1:
+            raise MeshError(f"--divisions must be positive integers, got {nx} {ny}")
+        kwargs["divisions"] = (nx, ny)
+    if seed is not None:
+        if "seed" not in takes:
+            raise MeshError(f"family {family!r} is deterministic: --seed does not apply")
+        kwargs["seed"] = int(seed)
+    for key, value in (params or {}).items():
+        if key in ("n_cells", "divisions", "seed", "size"):
+            raise MeshError(f"--param {key}: use the option --{key.replace('n_', '')} instead")
+        kwargs[key] = value
+    try:
+        mesh = fam.generate(**kwargs)
+    except (TypeError, ValueError) as exc:
+        msg = str(exc)
+        raise MeshError(
+            f"--param {msg}" if msg.startswith(tuple(params or ())) else f"family {family!r}: {msg}"
+        ) from exc
+    if boundary == "paper":
+        mesh = tag_rectangle(mesh)
+    if refine_contact:
+        mesh = refine_along(mesh, "contact", int(refine_contact))
+    return mesh

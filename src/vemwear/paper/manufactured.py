@@ -43,15 +43,15 @@ import numpy as np
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from ..mesh import Mesh, rectangle_squares, rectangle_triangles, tag_rectangle
+from ..mesh import Mesh, tag_rectangle
 from ..post.norms import exact_errors
 from ..vem import Material, body_force_vector, edge_load_vector, stiffness
 
 __all__ = [
     "DEFAULT_FAMILIES",
     "ETA",
-    "FAMILIES",
     "LAM",
+    "LEVEL_OPTIONS",
     "available_families",
     "body_force",
     "convergence_study",
@@ -70,15 +70,16 @@ PARTS: dict[str, Any] = {"clamped": ["left", "right"], "traction": ["top", "bott
 SIZE = (1.0, 1.0)
 PI = math.pi
 
-#: Mesh families: name -> description.
-FAMILIES: dict[str, str] = {
-    "squares": "n x n squares",
-    "triangles": "2 n^2 right triangles (the VEM equals P1 finite elements here)",
-    "voronoi": "centroidal Voronoi mesh with n^2 cells (vemwear.mesh.rectangle_voronoi)",
-    "hanging": "n x n squares, every other one split in four (4 hanging nodes per unsplit cell)",
-    "distorted": "n x n quadrilaterals with interior vertices moved by up to 0.2 h",
-    "hexagons": "hexagon-dominant mesh, n hexagons per row",
-    "nonconvex": "n x n chevron-shaped non-convex cells",
+#: The families of the study (names of :data:`vemwear.mesh.registry.FAMILIES`), with the
+#: options of level ``n`` beyond ``size``: about ``n`` cells per side, fixed seeds.
+LEVEL_OPTIONS: dict[str, Callable[[int], dict[str, Any]]] = {
+    "squares": lambda n: {"divisions": (n, n)},
+    "triangles": lambda n: {"divisions": (n, n)},  # the VEM equals P1 finite elements here
+    "voronoi": lambda n: {"n_cells": n * n, "seed": 0},
+    "hanging": lambda n: {"divisions": (n, n), "pattern": "checkerboard"},
+    "distorted": lambda n: {"divisions": (n, n), "amplitude": 0.2, "seed": 0},
+    "hexagons": lambda n: {"divisions": n},
+    "nonconvex": lambda n: {"divisions": (n, n)},
 }
 DEFAULT_FAMILIES: tuple[str, ...] = ("squares", "triangles", "voronoi", "hanging")
 
@@ -134,23 +135,18 @@ def traction(
 
 # ----------------------------------------------------------------------------- meshes
 def _builders() -> dict[str, Callable[[int], Mesh]]:
-    import vemwear.mesh as vm
+    from vemwear.mesh.registry import FAMILIES as REGISTRY
 
-    return {
-        "squares": lambda n: rectangle_squares(SIZE, (n, n)),
-        "triangles": lambda n: rectangle_triangles(SIZE, (n, n)),
-        "voronoi": lambda n: vm.rectangle_voronoi(SIZE, n * n, seed=0),
-        "hanging": lambda n: vm.squares_with_hanging_nodes(SIZE, (n, n), "checkerboard"),
-        "distorted": lambda n: vm.distorted_quads(SIZE, (n, n), 0.2, seed=0),
-        "hexagons": lambda n: vm.hexagons(SIZE, n),
-        "nonconvex": lambda n: vm.nonconvex_mesh(SIZE, (n, n)),
-    }
+    def builder(name: str) -> Callable[[int], Mesh]:
+        return lambda n: REGISTRY[name].generate(size=SIZE, **LEVEL_OPTIONS[name](n))
+
+    return {name: builder(name) for name in LEVEL_OPTIONS}
 
 
 def available_families() -> list[str]:
-    """The families of :data:`FAMILIES` whose mesh generator is available."""
+    """The families of :data:`LEVEL_OPTIONS` whose mesh generator is available."""
     b = _builders()
-    return [f for f in FAMILIES if f in b]
+    return [f for f in LEVEL_OPTIONS if f in b]
 
 
 def family_mesh(family: str, n: int) -> Mesh:

@@ -1,5 +1,8 @@
 """Saving a run to disk and reading it back: ``result.npz`` and ``summary.json``.
 
+One job (the two files' format, written and read): a fifth of its length is the table
+of arrays below, the one place where each array's name, shape and meaning is stated.
+
 :func:`save_result` writes two files into an output directory.
 
 ``result.npz``

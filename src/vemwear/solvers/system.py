@@ -1,6 +1,6 @@
 """The step problem (paper 3.21) as a complementarity problem on the free dofs.
 
-With ``w`` fixed, find ``u`` and ``p_rigid`` such that (design.md section 4)
+With ``w`` fixed, find ``u`` and ``p_rigid`` such that (docs/method.md, step problem)
 
     K u - F + N^T(weights (p(N u - w) + p_rigid)) + Tau^T(weights fric p(N u - w)) = 0,
     p_rigid >= 0,  N u <= g,  p_rigid (N u - g) = 0,
