@@ -11,7 +11,9 @@ left-rectangle wear (3.22) is exactly
     delta - gap - w^n = (delta - gap) (1 - k kappa |v*| k_s)^n.
 
 Once the rigid layer is reached (``u_nu - gap = g``), the soft pressure is ``c (g - w)``
-and ``g - w^n`` decays by ``(1 - k kappa |v*| c)`` per step. A second case of our own:
+and ``g - w^n`` decays by ``(1 - k kappa |v*| c)`` per step. The continuous wear of the
+constant push is ``(delta - gap) (1 - exp(-kappa |v*| k_s t))``, reached with order 1 in
+k. A second case of our own:
 the top pushed at a constant rate, ``u_y = -delta t``, so that contact starts at
 ``t_0 = gap / delta``; the continuous wear then is
 ``w(t) = delta (t - t_0) - delta / (a k_s) (1 - exp(-a k_s (t - t_0)))``,
@@ -92,12 +94,15 @@ def test_pushed_block_wears_as_the_closed_form(family: str, gap: float) -> None:
     assert np.abs(u[:, 1] - (-d + (d - delta) * P[:, 1] / H)).max() < 1e-14
 
 
-def test_pushed_into_the_rigid_layer() -> None:
+@pytest.mark.parametrize("family", ["squares", "voronoi"])
+def test_pushed_into_the_rigid_layer(family: str) -> None:
     """delta large: the body reaches the rigid layer at once; the soft pressure is
-    c (g - w) and the rigid layer carries the rest."""
+    c (g - w), so g - w^n = g (1 - k kappa |v*| c)^n, and the rigid layer carries the
+    rest."""
     delta, gap, n = 0.5, 0.02, 16
-    r = simulate(block("squares", -delta, gap, n), SolverOptions("newton"))
+    r = simulate(block(family, -delta, gap, n), SolverOptions("newton"))
     w = discrete_wear(lambda i: delta, gap, 1.0 / n, n)
+    assert np.abs(w - G * (1 - (1 - KAPPA * C / n) ** np.arange(n + 1))).max() < 1e-15
     assert np.abs(r.wear - w[:, None]).max() < 1e-14
     assert np.allclose(r.u_nu - gap, G, rtol=0, atol=1e-14)
     total = M * (delta - gap - G) / H  # the whole normal stress at the bottom
@@ -112,6 +117,20 @@ def test_solvers_agree_on_the_pushed_block(method: str) -> None:
     other = simulate(pr, SolverOptions(method, tol=1e-11, max_iter=20000))
     assert np.abs(other.wear - ref.wear).max() < 1e-8
     assert np.abs(other.p_rigid - ref.p_rigid).max() < 1e-7
+
+
+def test_pushed_block_converges_to_the_continuous_wear() -> None:
+    """u_y = -delta from t = 0: the continuous wear is
+    w(t) = (delta - gap) (1 - exp(-kappa |v*| k_s t)); the scheme converges to it with
+    order 1 in k."""
+    delta, gap = 0.05, 0.01
+    errors = []
+    for n in (16, 32, 64):
+        r = simulate(block("squares", -delta, gap, n), SolverOptions("newton"))
+        exact = (delta - gap) * (1 - np.exp(-KAPPA * 1.0 * K_S * r.t))
+        errors.append(float(np.abs(r.wear - exact[:, None]).max()))
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all((orders > 0.9) & (orders < 1.1)), (errors, orders)
 
 
 def test_pushed_at_a_rate_converges_to_the_continuous_wear() -> None:
@@ -140,6 +159,26 @@ def test_free_rigid_motions_are_named() -> None:
         rectangle_squares((W, H), (4, 2)), {"rollers": "left", "contact": "bottom", "free": "rest"}
     )
     with pytest.raises(ValueError, match="leave rigid motions free: the translation in y"):
+        Problem(
+            mesh,
+            Material(LAM, ETA),
+            TimeGrid.uniform(1.0, 2),
+            clamped=(),
+            displacement=(Prescribed("rollers", ux=0.0),),
+        )
+
+
+def test_free_rotation_is_named() -> None:
+    """u_x = 0 on the bottom only: the body may still move up and turn about any point
+    of the bottom; the message names both."""
+    mesh = select_parts(
+        rectangle_squares((W, H), (4, 2)), {"rollers": "bottom", "contact": "top", "free": "rest"}
+    )
+    with pytest.raises(
+        ValueError,
+        match=r"leave rigid motions free: the rotation about \(1, 0\), the translation in y; "
+        r"clamp a part",
+    ):
         Problem(
             mesh,
             Material(LAM, ETA),

@@ -63,6 +63,33 @@ def test_load_on_top_right_side_free_and_rollers() -> None:
     assert r.wear[-1].max() > 0
 
 
+def test_traction_component_as_a_table_along_the_part() -> None:
+    """f2 = [0, table]: along x as the expression -0.01 x, along s (the top runs from
+    x = 2 to x = 0) as the same load; the same load vector, the same run."""
+
+    def load(f2: list[Any]) -> Any:
+        d = variant(
+            boundary={
+                "clamped": "left",
+                "free": "right",
+                "contact": "bottom",
+                "traction": [{"name": "load", "on": "top", "f2": f2}],
+            },
+            loads={"f1": [0.0, -0.06]},
+        )
+        return parse(d).problem
+
+    ref = load([0.0, "-0.01*x"])
+    along_x = load([0.0, {"along": "x", "at": [0.0, 2.0], "values": [0.0, -0.02]}])
+    along_s = load([0.0, {"along": "s", "at": [0.0, 2.0], "values": [-0.02, 0.0]}])
+    F = ref.external_load(0.0)
+    assert np.abs(F).max() > 0
+    for pr in (along_x, along_s):
+        assert np.abs(pr.external_load(0.0) - F).max() < 1e-17
+    a, b = simulate(ref, "newton"), simulate(along_s, "newton")
+    assert np.abs(a.wear - b.wear).max() < 1e-15 and a.wear[-1].max() > 0
+
+
 def test_rollers_and_displacement_control_without_a_clamped_part() -> None:
     d = variant(
         boundary={
@@ -183,9 +210,16 @@ def test_reciprocating_foundation_with_levels_on_its_zeros() -> None:
 
 
 def test_two_contact_parts_with_their_own_data() -> None:
-    """A body between two moving foundations: each part its own kappa, v* and gap."""
+    """A body squeezed between two moving foundations: the left side clamped, the right
+    side pushed in (u_x = -0.2 t), so that the block bulges onto the layers at the bottom
+    and the top; each part its own law, mu, kappa, v* and gap. Both parts touch and
+    wear; the foundations slide, so the tangential force of each part is its own mu
+    times its normal force, in the direction of its own v*."""
     d = variant(
-        boundary={"clamped": "left", "free": "right"},
+        boundary={
+            "clamped": "left",
+            "displacement": [{"name": "squeeze", "on": "right", "ux": "-0.2*t"}],
+        },
         contact=[
             {
                 "name": "lower",
@@ -199,25 +233,33 @@ def test_two_contact_parts_with_their_own_data() -> None:
             {
                 "name": "upper",
                 "on": "top",
-                "p": {"type": "linear", "c": 0.8},
+                "p": {"type": "table", "r": [0.0, 0.1], "p": [0.0, 0.08]},
                 "g": 0.1,
-                "mu": 0.2,
-                "kappa": 0.0,
+                "mu": 0.1,
+                "kappa": 1.0,
                 "v_star": [-1.0, 0.0],
                 "gap": 0.001,
             },
         ],
-        loads={"f1": [0.0, -0.06], "f2": None},
+        loads={"f1": [0.0, 0.0]},
     )
-    d["loads"].pop("f2", None)
     pr = parse(d).problem
     cb = pr.contact
     assert cb.part_names == ("lower", "upper")
-    assert set(np.unique(pr.nodal["kappa"][cb.part == 1])) == {0.0}
+    assert set(np.unique(pr.nodal["kappa"][cb.part == 1])) == {1.0}
     assert set(np.unique(pr.nodal["gap"][cb.part == 1])) == {0.001}
+    assert set(np.unique(pr.nodal["gap"][cb.part == 0])) == {0.0}
     r = simulate(pr, "newton")
-    assert r.wear[-1, cb.part == 0].max() > 0 and r.wear[-1, cb.part == 1].max() == 0.0
-    assert r.forces is not None and r.force_parts[:2] == (
+    assert r.force_parts == (
         ("lower", "contact"),
         ("upper", "contact"),
+        ("clamped", "reaction"),
+        ("squeeze", "reaction"),
     )
+    F = r.forces
+    assert F is not None
+    for i, (mu, vx, ny) in enumerate([(0.2, 1.0, 1.0), (0.1, -1.0, -1.0)]):
+        assert r.wear[-1, cb.part == i].max() > 0
+        normal = F[1:, i, 1] * ny  # the layer pushes the body away from it
+        assert np.all(normal > 0)
+        assert np.abs(F[1:, i, 0] - mu * vx * normal).max() < 1e-14 * np.abs(normal).max()

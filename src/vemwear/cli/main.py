@@ -364,6 +364,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         say(f"{PROG}: {cfg.title}: " + ", ".join(f"{k} {v}" for k, v in est.rows()))
     if cfg.cycles is not None:
         from ..runner.cycles import execute_cycles
+        from ..runner.describe import part_wear_rows
 
         _last, cres = execute_cycles(plan, progress=not args.no_progress)
         print(
@@ -376,6 +377,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                         f"{cfg.cycles.jump}, max increment {cfg.cycles.max_increment:g} g)",
                     ),
                     ("max wear", f"{float(cres.wear[-1].max(initial=0.0)):.6g}"),
+                    *part_wear_rows(cfg.problem, cres.wear[-1]),
                     ("time", f"{time.perf_counter() - t0:.2f} s"),
                     ("output", str(plan.out)),
                 ]

@@ -11,6 +11,7 @@ parts), loads given by expressions being finite, and ``[output] times`` on the g
 from __future__ import annotations
 
 import copy
+import functools
 import os
 import tomllib
 from collections.abc import Callable, Mapping, Sequence
@@ -21,6 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..contact import arc_length, table_values
 from ..mesh import Mesh, MeshError, read_mesh, select_parts
 from ..mesh.registry import family
 from ..simulate import Problem, SolverOptions, TimeGrid
@@ -156,16 +158,37 @@ class NodalExpression:
 
 
 class FieldExpression:
-    """A load of numbers and expressions in ``x, y, t``: ``f(points, t)`` -> (m, 2)."""
+    """A load of numbers, expressions in ``x, y, t`` and (a traction) tables
+    ``{along, at, values}``: ``f(points, t)`` -> (m, 2).
 
-    def __init__(self, parts: Sequence[Expression | float], text: str) -> None:
-        self.parts, self.__name__ = tuple(parts), text
+    ``arc(points)`` gives the arc length along the load's boundary part (tables along
+    ``s``)."""
+
+    def __init__(
+        self,
+        parts: Sequence[Expression | float | s.Section],
+        text: str,
+        arc: Callable[[NDArray[np.float64]], NDArray[np.float64]] | None = None,
+    ) -> None:
+        self.parts = tuple(c.model_dump() if isinstance(c, s.Section) else c for c in parts)
+        self.__name__, self.arc = text, arc
         self.uses_t = any(isinstance(c, Expression) and "t" in c.names for c in self.parts)
 
     def __call__(self, x: NDArray[np.float64], t: float) -> NDArray[np.float64]:
         P = np.asarray(x, dtype=float).reshape(-1, 2)
         env = {"x": P[:, 0], "y": P[:, 1], "t": np.full(len(P), float(t))}
-        return np.column_stack([_value(c, env) for c in self.parts])
+        cols = []
+        for i, c in enumerate(self.parts):
+            if isinstance(c, dict):
+                cols.append(table_values(c, P, functools.partial(self._arc, P), f"f2[{i}]"))
+            else:
+                cols.append(_value(c, env))
+        return np.column_stack(cols)
+
+    def _arc(self, P: NDArray[np.float64]) -> NDArray[np.float64]:
+        if self.arc is None:
+            raise ValueError("f2: a table along s needs a boundary part")
+        return self.arc(P)
 
 
 class VelocityExpression:
@@ -188,7 +211,7 @@ def _data(v: Any, cls: type | None, raw: Any) -> Any:
         return NodalExpression(v)
     if isinstance(v, s.Section):
         return v.model_dump(by_alias=True)
-    if cls and isinstance(v, list) and any(isinstance(c, Expression) for c in v):
+    if cls and isinstance(v, list) and any(isinstance(c, Expression | s.Section) for c in v):
         return cls(v, "[" + ", ".join(repr(c) for c in raw) + "]")
     return tuple(v) if isinstance(v, list) else v
 
@@ -296,6 +319,9 @@ def _problem(
     f2: Any = _data(c.loads.f2, FieldExpression, loads.get("f2"))
     if parts.tractions:
         f2 = {n: _data(v, FieldExpression, rv) for n, (v, rv) in parts.tractions.items()}
+        for n, f in f2.items():
+            if isinstance(f, FieldExpression):
+                f.arc = functools.partial(arc_length, mesh, n)
     name, ct, rt, _ = parts.contacts[0]
     single = len(parts.contacts) == 1 and name == "contact"
     try:
@@ -338,27 +364,33 @@ def _problem(
         raise from_library(exc, src, section, rt if single else {}) from None
 
 
-def _check_loads(src: str, pr: Problem) -> None:
-    """Loads given by expressions give finite load vectors at every time level."""
-    fields: list[tuple[str, Any, NDArray[np.int64] | None]] = [("f1", pr.f1, None)]
-    fields += [("f2", f, pr.mesh.part_edges(n)) for n, f in pr.tractions.items()]
+def _check_loads(src: str, pr: Problem, parts: Roles) -> None:
+    """Loads given by expressions or tables give finite load vectors at every time level."""
+    fields: list[tuple[str, Any, NDArray[np.int64] | None]] = [("[loads] f1", pr.f1, None)]
+    fields += [
+        (f"{parts.where[n]} f2" if n in parts.tractions else "[loads] f2", f, pr.mesh.part_edges(n))
+        for n, f in pr.tractions.items()
+    ]
     for name, f, edges in fields:
         if not isinstance(f, FieldExpression):
             continue
         with np.errstate(all="ignore"):
             for n in range(len(pr.time.t)) if f.uses_t else range(1):
                 t = float(pr.time.t[n])
-                F = (
-                    body_force_vector(pr.mesh, f, t)
-                    if edges is None
-                    else edge_load_vector(pr.mesh, edges, f, t)
-                ).reshape(-1, 2)
+                try:
+                    F = (
+                        body_force_vector(pr.mesh, f, t)
+                        if edges is None
+                        else edge_load_vector(pr.mesh, edges, f, t)
+                    ).reshape(-1, 2)
+                except ValueError as exc:  # a table
+                    raise ConfigError(f"{src}: {name}{str(exc).removeprefix('f2')}") from None
                 bad = np.flatnonzero(~np.all(np.isfinite(F), axis=1))
                 if bad.size:
                     v = int(bad[0])
                     when = f" at t = {pr.time.t[n]:g} (level {n})" if f.uses_t else ""
                     raise ConfigError(
-                        f"{src}: [loads] {name} = {f.__name__} is not finite near vertex {v} "
+                        f"{src}: {name} = {f.__name__} is not finite near vertex {v} "
                         f"(x = {_pt(pr.mesh.points[v])}){when}"
                     )
 
@@ -469,7 +501,7 @@ def parse_config(
     else:
         where = f"[mesh] file {c.mesh.file!r}:"
     problem = _problem(src, c, raw, parts, mesh, material, grid, where)
-    _check_loads(src, problem)
+    _check_loads(src, problem, parts)
     title = c.title if c.title is not None else Path(source).stem
     cycles = None
     cj = c.time.cycle_jump

@@ -7,9 +7,12 @@ compliance law by its ``type``, ``[time]`` by which of ``steps``, ``dt``, ``patt
 ``levels`` it holds, ``[mesh]`` by its ``generator`` (the families and options of
 :mod:`vemwear.mesh.registry`) or ``file``, a coefficient as a number, an expression
 string (parsed here by :mod:`vemwear.config.expr`) or a table. The physics (signs,
-monotone laws, time grids, ``v* != 0``) is checked by the library objects the values
-become (:mod:`vemwear.config.build`), not here. The field descriptions are the key
-reference of ``docs/config.md`` and of the JSON Schema that ``vemwear schema`` prints.
+monotone laws, time grids) is checked by the library objects the values become
+(:mod:`vemwear.config.build`), not here. The field descriptions are the key reference
+of ``docs/config.md`` and of the JSON Schema that ``vemwear schema`` prints.
+
+One job, one module: every section's model is here so that the schema reads in one
+place; most of its length is the one-line description of each key.
 """
 
 import dataclasses
@@ -240,6 +243,16 @@ VStar: TypeAlias = by_kind(  # type: ignore[valid-type]
     table=VelocityTable,
 )
 Load: TypeAlias = components("x", "y", "t")  # type: ignore[valid-type]
+TractionComponent: TypeAlias = by_kind(  # type: ignore[valid-type]
+    "a number, an expression string in x, y, t or a table { along, at, values }",
+    number=float,
+    string=expression("x", "y", "t"),
+    table=CoefficientTable,
+)
+TractionLoad: TypeAlias = Annotated[
+    list[TractionComponent],  # type: ignore[valid-type]
+    Field(min_length=2, max_length=2),
+]
 DispComponent: TypeAlias = by_kind(  # type: ignore[valid-type]
     "a number or an expression string in x, y, t",
     number=float,
@@ -462,7 +475,10 @@ class TractionPart(Section):
         None, description="name of the part (default: traction1, traction2, ...)"
     )
     on: Selector = Field(title="selector", description="where")
-    f2: Load = Field(description="traction [f2x, f2y] on this part")
+    f2: TractionLoad = Field(
+        description="traction [f2x, f2y] on this part; a table is taken at the points of "
+        "the part (along s: the arc length along it)"
+    )
 
 
 def _traction_form(v: Any) -> str | None:

@@ -1,7 +1,7 @@
 """The contact part: nodal quadrature on Gamma_C, compliance laws, coefficients, v*(t)."""
 
-from .boundary import ContactBoundary, contact_boundary
-from .data import FoundationVelocity, NodalField, nodal_values
+from .boundary import ContactBoundary, arc_length, contact_boundary
+from .data import FoundationVelocity, NodalField, nodal_values, table_values
 from .law import (
     CallableCompliance,
     ComplianceLaw,
@@ -22,9 +22,11 @@ __all__ = [
     "NodalField",
     "NodalLaw",
     "TableCompliance",
+    "arc_length",
     "as_law",
     "check_law",
     "contact_boundary",
     "nodal_values",
+    "table_values",
     "tangential_velocity",
 ]

@@ -102,6 +102,38 @@ def _chains(
     return np.asarray(chain, dtype=np.int64), np.asarray(chain_s, dtype=float)
 
 
+def arc_length(mesh: Mesh, part: str, x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Arc length of points on a boundary part from the start of their chain of edges
+    (as :attr:`ContactBoundary.s` at the vertices); each point is taken on its nearest
+    edge of the part.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    part : str
+        The boundary part.
+    x : (n, 2) array
+        Points on the part (e.g. quadrature points of its edges).
+    """
+    P = mesh.points
+    edges = mesh.part_edges(part)
+    if len(edges) == 0:
+        raise MeshError(f"the mesh has no {part!r} boundary edges")
+    order, arc = _chains(edges, P, mesh.n_points)
+    s_vertex = np.zeros(mesh.n_points)
+    s_vertex[order] = arc
+    a, d = P[edges[:, 0]], P[edges[:, 1]] - P[edges[:, 0]]
+    length = np.linalg.norm(d, axis=1)
+    x = np.asarray(x, dtype=float).reshape(-1, 2)
+    out = np.empty(len(x))
+    for i in range(0, len(x), 512):  # (512, edges) at a time
+        rel = x[i : i + 512, None, :] - a[None]
+        t = np.clip(np.einsum("qek,ek->qe", rel, d) / length**2, 0.0, 1.0)
+        e = np.linalg.norm(rel - t[..., None] * d, axis=2).argmin(axis=1)
+        out[i : i + 512] = s_vertex[edges[e, 0]] + t[np.arange(len(e)), e] * length[e]
+    return out
+
+
 def contact_boundary(
     mesh: Mesh,
     parts: tuple[str, ...] = ("contact",),

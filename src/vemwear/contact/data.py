@@ -3,8 +3,10 @@
 A coefficient along Gamma_C is a number, a callable of the node coordinates
 (Python API), or a piecewise-linear table ``{"along": "x" | "y" | "s", "at": [...],
 "values": [...]}`` in a coordinate of the node (``s`` is the arc length along the
-contact part). ``v*(t)`` is a 2-vector, a callable of t, or a table
-``{"t": [...], "values": [[vx, vy], ...]}`` interpolated linearly in time. The
+contact part); :func:`table_values` evaluates such a table at any boundary points (a
+traction component of a config file may be one too). ``v*(t)`` is a 2-vector, a
+callable of t, or a table ``{"t": [...], "values": [[vx, vy], ...]}`` interpolated
+linearly in time. The
 coefficients enter the scheme at the contact nodes (nodal quadrature, docs/method.md,
 section 3); v*(t) through the friction direction ``n* = -v* / |v*|`` (2.2) and the
 wear rate ``kappa |v*(t)| p(u_nu - w)`` of (3.22).
@@ -30,15 +32,7 @@ def nodal_values(spec: NodalField, cb: ContactBoundary, name: str) -> NDArray[np
         v = np.asarray(spec(cb.points), dtype=float)
         v = np.broadcast_to(v, (cb.m,)).copy()
     elif isinstance(spec, Mapping):
-        along = spec.get("along", "x")
-        coord = {"x": cb.points[:, 0], "y": cb.points[:, 1], "s": cb.s}.get(along)
-        if coord is None:
-            raise ValueError(f"{name}: 'along' must be 'x', 'y' or 's', got {along!r}")
-        at = np.asarray(spec["at"], dtype=float)
-        vals = np.asarray(spec["values"], dtype=float)
-        if at.ndim != 1 or at.shape != vals.shape or at.size < 1 or np.any(np.diff(at) <= 0):
-            raise ValueError(f"{name}: 'at' must increase strictly and match 'values' in length")
-        v = np.interp(coord, at, vals)
+        v = table_values(spec, cb.points, lambda: cb.s, name)
     else:
         v = np.full(cb.m, float(spec))
     if not np.all(np.isfinite(v)):
@@ -48,6 +42,38 @@ def nodal_values(spec: NodalField, cb: ContactBoundary, name: str) -> NDArray[np
             f"(vertex {cb.nodes[a]}, x = {cb.points[a].tolist()})"
         )
     return v
+
+
+def table_values(
+    spec: Mapping[str, Any],
+    points: NDArray[np.float64],
+    arc: Callable[[], NDArray[np.float64]],
+    name: str,
+) -> NDArray[np.float64]:
+    """A table ``{"along", "at", "values"}`` at boundary points (shape (n,)).
+
+    Parameters
+    ----------
+    spec : mapping
+        ``along`` (``"x"``, ``"y"`` or ``"s"``; default ``"x"``), ``at`` (strictly
+        increasing) and ``values``; piecewise linear, constant beyond the ends.
+    points : (n, 2) array
+        The points.
+    arc : callable
+        ``arc()`` -> (n,) arc lengths of the points along their part (called for
+        ``along = "s"`` only).
+    name : str
+        The coefficient, for messages.
+    """
+    along = spec.get("along", "x")
+    if along not in ("x", "y", "s"):
+        raise ValueError(f"{name}: 'along' must be 'x', 'y' or 's', got {along!r}")
+    at = np.asarray(spec["at"], dtype=float)
+    vals = np.asarray(spec["values"], dtype=float)
+    if at.ndim != 1 or at.shape != vals.shape or at.size < 1 or np.any(np.diff(at) <= 0):
+        raise ValueError(f"{name}: 'at' must increase strictly and match 'values' in length")
+    coord = arc() if along == "s" else np.asarray(points, dtype=float)[:, "xy".index(along)]
+    return np.interp(coord, at, vals)
 
 
 @dataclass(frozen=True)

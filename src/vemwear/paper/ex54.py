@@ -6,7 +6,7 @@ Gamma_C = bottom side; lam = eta = 4, T = 1, u^0 = 0, p(r) = 0.4 r_+,
 f1 = (0, -0.06), f2 = 0, g = 0.1, v* = (1, 0), mu = 0.2, kappa = 2, k = 1/64.
 The two meshes of the paper are
 
-A. 2048 squares, 64 x 32, h = 1/32 (paper Fig. 7);
+A. 2048 squares, 64 x 32: 32 squares per unit length (the paper's h = 1/32; Fig. 7);
 B. 2048 general polygons (paper Fig. 8): here the centroidal Voronoi mesh of
    :func:`vemwear.mesh.rectangle_voronoi` with exactly 2048 cells and seed 0.
 
@@ -89,7 +89,7 @@ TITLE = f"Example {NAME}"
 DESCRIPTION = DESCRIPTIONS[NAME]
 
 MU, KAPPA = ex52.DATA_SETS["set1"]["mu"], ex52.DATA_SETS["set1"]["kappa"]
-DIVISIONS: tuple[int, int] = (64, 32)  # mesh A: 2048 squares, h = 1/32
+DIVISIONS: tuple[int, int] = (64, 32)  # mesh A: 2048 squares, side 1/32 (the paper's h)
 N_CELLS = 2048  # mesh B: 2048 Voronoi polygons
 SEED = 0
 STEPS = 64  # k = 1/64

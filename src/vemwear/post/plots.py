@@ -4,7 +4,8 @@ the deformed mesh and time histories.
 Every function builds a :class:`matplotlib.figure.Figure` directly (no ``pyplot``, so
 no global backend or figure registry is touched and nothing needs a display), returns
 it, and saves it when ``path`` is given (format from the suffix, PNG by default, at
-150 dpi). Titles state the data: ``mu``, ``kappa`` and ``v*`` of the problem.
+150 dpi). Titles state the data: ``mu``, ``kappa`` and ``v*`` of each contact part; the
+penetration is labelled ``u_nu - gap - w`` where a gap exists.
 """
 
 from __future__ import annotations
@@ -68,21 +69,38 @@ def _fmt_nodal(v: NDArray[np.float64]) -> str:
     return f"{_fmt_num(lo)}..{_fmt_num(hi)}"
 
 
-def _fmt_vstar(result: Result) -> str | None:
-    desc = result.problem.v_star.describe()  # type: ignore[union-attr]
+def _fmt_vstar(velocity: Any) -> str | None:
+    desc = velocity.describe()
     if isinstance(desc, list) and len(desc) == 2 and all(isinstance(c, float) for c in desc):
         return "(" + ", ".join(f"{c:g}" for c in desc) + ")"
     return None
 
 
 def _params(result: Result, vstar: bool = True) -> str:
-    """``mu = .., kappa = .., v* = ..`` in mathtext, for titles and legends."""
-    nodal = result.problem.nodal
-    parts = [rf"$\mu$ = {_fmt_nodal(nodal['mu'])}", rf"$\kappa$ = {_fmt_nodal(nodal['kappa'])}"]
-    vs = _fmt_vstar(result) if vstar else None
-    if vs is not None:
-        parts.append(rf"$\mathbf{{v}}^*$ = {vs}")
-    return ", ".join(parts)
+    """``mu = .., kappa = .., v* = ..`` in mathtext, for titles and legends; with
+    several contact parts, one line ``part: mu = .., ...`` per part, each with its own
+    data."""
+    pr = result.problem
+    nodal, part = pr.nodal, np.asarray(pr.contact.part)
+    lines = []
+    for i, pc in enumerate(pr.parts):
+        sel = part == i
+        items = [
+            rf"$\mu$ = {_fmt_nodal(nodal['mu'][sel])}",
+            rf"$\kappa$ = {_fmt_nodal(nodal['kappa'][sel])}",
+        ]
+        vs = _fmt_vstar(pc.velocity) if vstar else None
+        if vs is not None:
+            items.append(rf"$\mathbf{{v}}^*$ = {vs}")
+        lines.append(", ".join(items) if len(pr.parts) == 1 else f"{pc.part}: {', '.join(items)}")
+    return "\n".join(lines)
+
+
+def _with_gap(result: Result, label: str) -> str:
+    """``label`` with the penetration written ``u_nu - gap - w`` where a gap exists."""
+    if np.any(np.asarray(result.problem.nodal["gap"]) != 0):
+        return label.replace(r"u_\nu - w", r"u_\nu - \mathrm{gap} - w")
+    return label
 
 
 def _finish(fig: Figure, path: str | os.PathLike[str] | None) -> Figure:
@@ -213,7 +231,8 @@ def plot_contact_profiles(
     *,
     abscissa: str = "auto",
 ) -> Figure:
-    """Wear ``w`` and penetration ``u_nu - w`` along Gamma_C at some times (paper Figs 3-5).
+    """Wear ``w`` and penetration ``u_nu - gap - w`` along Gamma_C at some times (paper
+    Figs 3-5).
 
     Parameters
     ----------
@@ -225,7 +244,7 @@ def plot_contact_profiles(
     path : path, optional
         Save the figure there.
     title : str, optional
-        Figure title; default names the data (``mu``, ``kappa``, ``v*``).
+        Figure title; default names the data (``mu``, ``kappa``, ``v*`` of each part).
     abscissa : {"auto", "x", "y", "s"}
         Horizontal coordinate: ``x_1``, ``x_2`` or the arc length ``s`` along Gamma_C;
         ``auto`` takes ``x_1`` (``x_2``) on a horizontal (vertical) straight contact
@@ -258,8 +277,8 @@ def plot_contact_profiles(
                 xs, ys = _broken(x[order], data[lv][order], breaks)
                 ax.plot(xs, ys, color=c, lw=1.6, label=f"$t$ = {result.t[lv]:g}", **mk)
             ax.set_xlabel(_ABSCISSA_LABEL[which])
-            ax.set_ylabel(QUANTITIES[name])
-            ax.set_title(_cap(QUANTITIES[name]) + f" on {where}")
+            ax.set_ylabel(_with_gap(result, QUANTITIES[name]))
+            ax.set_title(_cap(_with_gap(result, QUANTITIES[name])) + f" on {where}")
             ax.grid(True, lw=0.4, alpha=0.5)
             ax.set_xlim(*_extent(result, which, part))
     axes[0, 0].legend(loc="best", frameon=False)
@@ -365,7 +384,7 @@ def compare_profiles(
                     **kw,
                 )
     ax.set_xlabel(_ABSCISSA_LABEL[which])
-    ax.set_ylabel(QUANTITIES[quantities[0]] if len(quantities) == 1 else "value")
+    ax.set_ylabel(_with_gap(first, QUANTITIES[quantities[0]]) if len(quantities) == 1 else "value")
     ax.grid(True, lw=0.4, alpha=0.5)
     ax.set_xlim(*_extent(first, which))
     ax.legend(loc="best", frameon=False, fontsize="small")
@@ -375,7 +394,7 @@ def compare_profiles(
             if len(quantities) == 1
             else " and ".join(QUANTITIES[q] for q in quantities)
         )
-        title = f"{_cap(what)} at $t$ = {time:g}"
+        title = f"{_cap(_with_gap(first, what))} at $t$ = {time:g}"
         if common:
             title += f": {params[next(iter(results))]}"
     ax.set_title(title)
@@ -401,7 +420,7 @@ def plot_time_history(
     Returns
     -------
     Figure
-        Left axis: ``max w``, ``max (u_nu - w)`` and ``max u_nu`` over the contact
+        Left axis: ``max w``, ``max (u_nu - gap - w)`` and ``max u_nu`` over the contact
         nodes; right axis: iterations per level (bars).
     """
     t = np.asarray(result.t)
@@ -422,7 +441,7 @@ def plot_time_history(
         np.asarray(result.penetration).max(axis=1),
         color="#2166ac",
         lw=1.8,
-        label=r"max $(u_\nu - w)$",
+        label=_with_gap(result, r"max $(u_\nu - w)$"),
     )
     ax.plot(
         t, np.asarray(result.u_nu).max(axis=1), color="0.2", lw=1.2, ls="--", label=r"max $u_\nu$"

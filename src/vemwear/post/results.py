@@ -91,8 +91,10 @@ of arrays below, the one place where each array's name, shape and meaning is sta
 
 ``summary.json``
     A JSON object with the keys ``format`` (``"vemwear-result/1"``), ``vemwear_version``,
-    ``created`` (UTC, ISO 8601), ``inputs`` (``problem``: ``Problem.describe()``;
-    ``extra``: whatever the caller passed, e.g. the configuration), ``solver``
+    ``created`` (UTC, ISO 8601), ``inputs`` (``problem``: ``Problem.describe()`` with
+    ``parts`` the boundary parts that have edges and, with several contact parts, their
+    data under ``contacts`` only; ``extra``: whatever the caller passed, e.g. the
+    configuration), ``solver``
     (``Result.solver``), ``statistics`` (levels, contact nodes, iteration totals, the
     largest value of each KKT residual), ``timings`` (``Result.timings``, seconds),
     ``outputs`` (key numbers of the solution: maximal wear at the final time and where,
@@ -314,6 +316,20 @@ def summarize(result: Result) -> dict[str, Any]:
     return {"statistics": stats, "outputs": outputs}
 
 
+def _described(problem: Any) -> dict[str, Any]:
+    """``Problem.describe()`` as ``summary.json`` shows it: ``parts`` lists the boundary
+    parts that have edges (not the paper's empty defaults); with several contact parts
+    the single-part entries ``p, g, mu, kappa, v_star, gap`` (defaults the problem does
+    not use) are left out, each part's data being under ``contacts``. The fingerprint of
+    a run keeps the whole ``describe()``."""
+    d = problem.describe()
+    d["parts"] = list(problem.mesh.parts)
+    if problem.contacts:
+        for key in ("p", "g", "mu", "kappa", "v_star", "gap"):
+            d.pop(key, None)
+    return d
+
+
 def _summary(
     result: Result, extra: dict[str, Any] | None, reason: str | None = None
 ) -> dict[str, Any]:
@@ -330,7 +346,7 @@ def _summary(
         **partial,
         "vemwear_version": __version__,
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
-        "inputs": {"problem": result.problem.describe(), "extra": extra or {}},
+        "inputs": {"problem": _described(result.problem), "extra": extra or {}},
         "solver": dict(result.solver),
         "statistics": s["statistics"],
         "timings": dict(result.timings),

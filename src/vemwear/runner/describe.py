@@ -12,10 +12,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
+    from numpy.typing import NDArray
+
     from ..config import Config
     from ..simulate import Problem, Result
 
-__all__ = ["check_rows", "format_k", "result_rows", "smallness_report"]
+__all__ = ["check_rows", "format_k", "part_wear_rows", "result_rows", "smallness_report"]
 
 Rows = list[tuple[str, str]]
 
@@ -192,8 +194,24 @@ def result_rows(result: Result) -> Rows:
             if wT.size
             else "-",
         ),
+        *part_wear_rows(result.problem, wT),
         *_force_rows(result),
     ]
+
+
+def part_wear_rows(problem: Problem, wear: NDArray[np.float64]) -> Rows:
+    """The largest wear ``wear`` (at the contact nodes) of every contact part and where
+    (a row each, when there are several)."""
+    cb = problem.contact
+    if len(cb.part_names) < 2:
+        return []
+    rows = []
+    for i, name in enumerate(cb.part_names):
+        sel = np.flatnonzero(np.asarray(cb.part) == i)
+        a = int(sel[np.argmax(wear[sel])])
+        x = ", ".join(f"{c:.4g}" for c in cb.points[a])
+        rows.append((f"max wear at T: {name}", f"{float(wear[a]):.6g} at x = ({x})"))
+    return rows
 
 
 def _force_rows(result: Result) -> Rows:
