@@ -1,0 +1,307 @@
+"""Global dofs, assembly and loads of second-order virtual elements (k = 2, 2D elasticity).
+
+Global numbering (``n_p`` vertices, ``n_e`` edges, ``n_c`` cells):
+
+* ``2 v + c``: component c at vertex v (as for k = 1, :func:`vemwear.vem.assembly._dofs`);
+* ``2 n_p + 2 e + c``: the mean of component c over edge e, ``e`` the row of
+  :attr:`vemwear.mesh.Mesh.edges` (unique undirected edges, ``a < b``). A mean against P0
+  does not depend on the edge's orientation, so both cells of an edge share the dof as is;
+* ``2 n_p + 2 n_e + 2 k + c``: the mean of component c over cell k.
+
+Hanging nodes are vertices of every cell whose boundary passes through them, so the
+large cell has two edges where its neighbours have two: the edges, and the dofs, are
+conforming without any special treatment.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import ArrayLike, NDArray
+
+from ..mesh.polymesh import Mesh
+from .local import Material
+from .local2 import (
+    basis_gradients,
+    basis_values,
+    element_matrices2,
+    local_dof_count,
+    local_projection2,
+)
+from .quadrature import Field, cell_means, eval_field, fan
+
+__all__ = [
+    "GAUSS3",
+    "LOAD_RULES",
+    "Numbering2",
+    "P2Fields",
+    "body_force_vector2",
+    "cell_dofs2",
+    "edge_ids",
+    "edge_load_vector2",
+    "edge_shape_functions",
+    "facet_dofs2",
+    "interpolate2",
+    "numbering2",
+    "project2",
+    "stiffness2",
+    "traction_vector2",
+]
+
+#: Cells per batch of local matrices in :func:`stiffness2`.
+CHUNK = 2048
+
+#: Three-point Gauss rule on [0, 1]: points and weights (exact for degree 5).
+GAUSS3 = (
+    np.array([0.5 - 0.5 * np.sqrt(0.6), 0.5, 0.5 + 0.5 * np.sqrt(0.6)]),
+    np.array([5.0, 8.0, 5.0]) / 18.0,
+)
+
+
+class Numbering2(NamedTuple):
+    """Sizes and offsets of the k = 2 global dofs of a mesh."""
+
+    n_points: int
+    n_edges: int
+    n_cells: int
+
+    @property
+    def edge_offset(self) -> int:
+        return 2 * self.n_points
+
+    @property
+    def cell_offset(self) -> int:
+        return 2 * (self.n_points + self.n_edges)
+
+    @property
+    def n_dofs(self) -> int:
+        return 2 * (self.n_points + self.n_edges + self.n_cells)
+
+
+def numbering2(mesh: Mesh) -> Numbering2:
+    """The global dof counts of ``mesh`` for k = 2."""
+    return Numbering2(mesh.n_points, len(mesh.edges), mesh.n_cells)
+
+
+def edge_ids(mesh: Mesh, a: ArrayLike, b: ArrayLike) -> NDArray[np.int64]:
+    """Rows of :attr:`Mesh.edges` of the edges ``(a, b)`` (either orientation).
+
+    Raises
+    ------
+    ValueError
+        If some ``(a, b)`` is not an edge of the mesh.
+    """
+    a, b = np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64)
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    E = mesh.edges
+    n = max(mesh.n_points, 1)
+    keys = E[:, 0] * n + E[:, 1]  # sorted: np.unique sorts the rows
+    k = lo * n + hi
+    pos = np.minimum(np.searchsorted(keys, k), len(keys) - 1)
+    if np.any(keys[pos] != k):
+        raise ValueError("edge_ids: some vertex pairs are not edges of the mesh")
+    return pos
+
+
+def cell_dofs2(mesh: Mesh, ids: NDArray[np.int64], verts: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Global dofs (m, 4 n + 2) of cells ``ids`` with vertices ``verts`` (m, n), in the local
+    order of :mod:`vemwear.vem.local2`."""
+    num = numbering2(mesh)
+    m, n = verts.shape
+    d = np.empty((m, local_dof_count(n)), dtype=np.int64)
+    d[:, 0 : 2 * n : 2] = 2 * verts
+    d[:, 1 : 2 * n : 2] = 2 * verts + 1
+    e = num.edge_offset + 2 * edge_ids(mesh, verts, np.roll(verts, -1, axis=1))
+    d[:, 2 * n : 4 * n : 2] = e
+    d[:, 2 * n + 1 : 4 * n : 2] = e + 1
+    d[:, 4 * n] = num.cell_offset + 2 * ids
+    d[:, 4 * n + 1] = num.cell_offset + 2 * ids + 1
+    return d
+
+
+def stiffness2(mesh: Mesh, material: Material, stabilization: str = "paper") -> sp.csr_matrix:
+    """Assemble ``a_h`` (3.11) of k = 2 on all dofs: local matrices by vertex count in chunks
+    of :data:`CHUNK` cells, one COO scatter."""
+    num = numbering2(mesh)
+    ndof = num.n_dofs
+    index = np.int32 if ndof < 2**31 - 1 else np.int64
+    total = sum(len(v) * local_dof_count(n) ** 2 for n, (_i, v) in mesh.groups.items())
+    rows, cols = np.empty(total, dtype=index), np.empty(total, dtype=index)
+    vals = np.empty(total)
+    at = 0
+    for n, (ids, verts) in mesh.groups.items():
+        nd = local_dof_count(n)
+        for a in range(0, len(verts), CHUNK):
+            v, c = verts[a : a + CHUNK], ids[a : a + CHUNK]
+            size = len(v) * nd * nd
+            vals[at : at + size] = element_matrices2(
+                mesh.points[v], material, stabilization
+            ).K.ravel()
+            d = cell_dofs2(mesh, c, v).astype(index)
+            rows[at : at + size] = np.repeat(d, nd, axis=1).ravel()
+            cols[at : at + size] = np.tile(d, (1, nd)).ravel()
+            at += size
+    A = sp.coo_matrix((vals, (rows, cols)), shape=(ndof, ndof)).tocsr()
+    A.sum_duplicates()
+    return A
+
+
+LOAD_RULES = ("paper", "projection")
+
+
+def body_force_vector2(
+    mesh: Mesh,
+    f1: Field,
+    t: float = 0.0,
+    *,
+    rule: str = "paper",
+    material: Material | None = None,
+) -> NDArray[np.float64]:
+    """The body-force load of k = 2.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    f1 : Field
+    t : float
+    rule : {"paper", "projection"}
+        ``"paper"`` (Section 3.3, k >= 2): ``<f_1h, v> = sum_K int_K P_0 f1 . v
+        = sum_K |K| P_0^K f1 . (cell moment of v)``; only the cell dofs are loaded.
+        ``"projection"``: ``<f_1h, v> = sum_K int_K f1 . Pi v``, by the degree-5 rule on the
+        fan. Since the cell mean of ``Pi v`` is the cell moment, it equals the paper's load
+        for f1 constant on each cell, and ``(f1, v - Pi v) = (f1 - P_0 f1, v - Pi v)`` is
+        O(h^3): the L2 error of order 3, where the paper's P_0 load gives order 2 for k = 2
+        (docs/method.md, "Second order (k = 2)").
+    material : Material
+        Needed by ``"projection"`` (Pi of (3.8) depends on it).
+    """
+    if rule not in LOAD_RULES:
+        raise ValueError(f"unknown load rule {rule!r}; expected one of {', '.join(LOAD_RULES)}")
+    num = numbering2(mesh)
+    F = np.zeros(num.n_dofs)
+    if rule == "paper":
+        fbar = cell_means(mesh, f1, t, "body force f1")
+        F[num.cell_offset :] = (mesh.cell_areas[:, None] * fbar).ravel()
+        return F
+    if material is None:
+        raise ValueError("the 'projection' load rule needs the material (Pi depends on it)")
+    for _n, (ids, verts) in mesh.groups.items():
+        X = mesh.points[verts]
+        lp = local_projection2(X, material)
+        pts, w = fan(X).points(5)
+        q = basis_values((pts - lp.center[:, None, :]) / lp.h[:, None, None])  # (m, Q, 12, 2)
+        f = eval_field(f1, pts.reshape(-1, 2), t, "body force f1").reshape(pts.shape)
+        fq = np.einsum("mq,mqc,mqac->ma", w, f, q)  # int_K f1 . q_a
+        np.add.at(F, cell_dofs2(mesh, ids, verts), np.einsum("ma,mal->ml", fq, lp.pi))
+    return F
+
+
+def edge_shape_functions(s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The quadratic on an edge from its dofs, at parameters ``s`` in [0, 1]: columns for
+    the start value, the end value and the edge mean; shape (len(s), 3).
+
+    With the midpoint value ``(6 mean - v_a - v_b) / 4`` in the Lagrange basis:
+    ``phi_a = (1 - s)(1 - 2 s) - s (1 - s)``, ``phi_b = s (2 s - 1) - s (1 - s)``,
+    ``phi_mean = 6 s (1 - s)``.
+    """
+    bub = s * (1.0 - s)
+    return np.column_stack([(1 - s) * (1 - 2 * s) - bub, s * (2 * s - 1) - bub, 6.0 * bub])
+
+
+def edge_load_vector2(
+    mesh: Mesh, edges: NDArray[np.int64], f: Field, t: float = 0.0, name: str = "traction f2"
+) -> NDArray[np.float64]:
+    """``int_E f . v ds`` over the given edges (pairs of vertex ids) by three-point Gauss on
+    every edge: exact for f quadratic along the edge (v is quadratic there)."""
+    num = numbering2(mesh)
+    F = np.zeros(num.n_dofs)
+    if len(edges) == 0:
+        return F
+    edges = np.asarray(edges, dtype=np.int64)
+    a, b = mesh.points[edges[:, 0]], mesh.points[edges[:, 1]]
+    L = np.linalg.norm(b - a, axis=1)[:, None]
+    e = num.edge_offset + 2 * edge_ids(mesh, edges[:, 0], edges[:, 1])
+    s, w = GAUSS3
+    phi = edge_shape_functions(s)
+    for q in range(len(s)):
+        val = eval_field(f, (1 - s[q]) * a + s[q] * b, t, name) * (w[q] * L)
+        for c in range(2):
+            np.add.at(F, 2 * edges[:, 0] + c, phi[q, 0] * val[:, c])
+            np.add.at(F, 2 * edges[:, 1] + c, phi[q, 1] * val[:, c])
+            np.add.at(F, e + c, phi[q, 2] * val[:, c])
+    return F
+
+
+def traction_vector2(mesh: Mesh, f2: Field, t: float = 0.0) -> NDArray[np.float64]:
+    """``int_{Gamma_N} f2 . v ds`` on the traction part (k = 2)."""
+    return edge_load_vector2(mesh, mesh.part_edges("traction"), f2, t)
+
+
+def facet_dofs2(mesh: Mesh, edges: NDArray[np.int64]) -> tuple[NDArray[np.int64], ...]:
+    """For each component, the sorted dofs on the closure of the given edges (vertex values
+    and edge means): the dofs to clamp or prescribe on a part."""
+    num = numbering2(mesh)
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    verts = np.unique(edges)
+    e = np.unique(edge_ids(mesh, edges[:, 0], edges[:, 1]))
+    return tuple(np.concatenate([2 * verts + c, num.edge_offset + 2 * e + c]) for c in range(2))
+
+
+def interpolate2(mesh: Mesh, u: Field, t: float = 0.0) -> NDArray[np.float64]:
+    """The dofs of a displacement field: vertex values, edge means (three-point Gauss, exact
+    for quintics along the edge) and cell means (the degree-5 rule on the fan)."""
+    num = numbering2(mesh)
+    out = np.empty(num.n_dofs)
+    out[: num.edge_offset] = eval_field(u, mesh.points, t, "u").ravel()
+    E = mesh.edges
+    a, b = mesh.points[E[:, 0]], mesh.points[E[:, 1]]
+    s, w = GAUSS3
+    mean = sum(w[q] * eval_field(u, (1 - s[q]) * a + s[q] * b, t, "u") for q in range(len(s)))
+    out[num.edge_offset : num.cell_offset] = np.asarray(mean).ravel()
+    cm = np.zeros((mesh.n_cells, 2))
+    for _n, (ids, verts) in mesh.groups.items():
+        fn = fan(mesh.points[verts])
+        pts, wt = fn.points(5)
+        val = eval_field(u, pts.reshape(-1, 2), t, "u").reshape(pts.shape)
+        cm[ids] = np.einsum("mq,mqc->mc", wt, val) / fn.area.sum(axis=1)[:, None]
+    out[num.cell_offset :] = cm.ravel()
+    return out
+
+
+class P2Fields(NamedTuple):
+    """A quadratic field per cell (e.g. ``Pi u`` for k = 2): ``sum_a coef[k, a] q_a`` in the
+    basis :data:`vemwear.vem.local2.BASIS` about ``center[k]`` with scale ``h[k]``."""
+
+    coef: NDArray[np.float64]  # (n_cells, 12)
+    center: NDArray[np.float64]  # (n_cells, 2)
+    h: NDArray[np.float64]  # (n_cells,)
+
+    def at(
+        self, points: ArrayLike, cells: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Values (q, 2) and gradients (q, 2, 2), ``[i, j] = d_j u_i``, of the field of
+        ``cells[j]`` at ``points[j]``."""
+        x = np.asarray(points, dtype=float).reshape(-1, 2)
+        c = np.asarray(cells, dtype=np.int64)
+        xi = (x - self.center[c]) / self.h[c][:, None]
+        val = np.einsum("qa,qac->qc", self.coef[c], basis_values(xi))
+        grad = np.einsum("qa,qacd->qcd", self.coef[c], basis_gradients(xi, self.h[c]))
+        return val, grad
+
+
+def project2(mesh: Mesh, material: Material, u: ArrayLike) -> P2Fields:
+    """``Pi u`` (3.8) with the k = 2 rigid-motion conditions on every cell, from the global
+    dofs ``u`` (``numbering2(mesh).n_dofs`` entries)."""
+    v = np.asarray(u, dtype=float).reshape(-1)
+    num = numbering2(mesh)
+    if v.size != num.n_dofs:
+        raise ValueError(f"project2: u has {v.size} entries, expected {num.n_dofs}")
+    nc = mesh.n_cells
+    coef, center, h = np.zeros((nc, 12)), np.zeros((nc, 2)), np.zeros(nc)
+    for _n, (ids, verts) in mesh.groups.items():
+        lp = local_projection2(mesh.points[verts], material)
+        coef[ids] = np.einsum("mal,ml->ma", lp.pi, v[cell_dofs2(mesh, ids, verts)])
+        center[ids], h[ids] = lp.center, lp.h
+    return P2Fields(coef, center, h)
