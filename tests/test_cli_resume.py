@@ -164,8 +164,9 @@ def test_sigterm_partial_and_resume_newton_full(
     out = tmp_path / "out"
     stop_at(7, lambda: os.kill(os.getpid(), signal.SIGTERM))
     assert run(config, out) == 130
-    err = capsys.readouterr().err
-    assert err.startswith(
+    first, last = capsys.readouterr().err.splitlines()
+    assert first == "vemwear: terminated (SIGTERM); stopping"  # said when the signal comes
+    assert last.startswith(
         f"vemwear: interrupted; the 7 finished time levels (of {STEPS + 1}) are saved in {out}"
     )
     summary = json.loads((out / "summary.json").read_text())

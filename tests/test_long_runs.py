@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -116,9 +117,12 @@ def test_hangup_and_terminate_keep_the_finished_levels(
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
-    assert err.startswith("vemwear: interrupted; the ") and "--resume" in err
+    lines = err.splitlines()
+    reason = {"SIGHUP": "hung up (SIGHUP)", "SIGTERM": "terminated (SIGTERM)"}[sig.name]
+    assert lines[0] == f"vemwear: {reason}; stopping", err
+    assert lines[-1].startswith("vemwear: interrupted; the ") and "--resume" in lines[-1]
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["partial"] is True and summary["reason"].endswith(f"({sig.name})")
+    assert summary["partial"] is True and summary["reason"] == reason
     assert "UNFINISHED" in (out / "PARTIAL.txt").read_text()
     assert run(config, out, "--resume").returncode == 0
     assert_same(out, reference)
@@ -127,15 +131,24 @@ def test_hangup_and_terminate_keep_the_finished_levels(
 def test_second_ctrl_c_does_not_abandon_the_save(
     config: Path, tmp_path: Path, reference: dict[str, np.ndarray]
 ) -> None:
+    """The second Ctrl-C is sent once the child has said that the first one stops it (its
+    first line on stderr), so the two are never merged into one and the second arrives
+    while the finished levels are being saved."""
     out = tmp_path / "out"
     proc = start(config, out)
     wait_for(out / "checkpoint.npz", proc)
     proc.send_signal(signal.SIGINT)
-    time.sleep(0.002)
+    assert proc.stderr is not None
+    first = proc.stderr.readline()
+    assert first == "vemwear: interrupted (Ctrl-C); stopping\n"
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
-    assert "are saved in" in err
+    lines = err.splitlines()
+    assert lines[0] == (
+        "vemwear: saving the finished levels; please wait (once more to abandon the save)"
+    ), err
+    assert len(lines) == 2 and "are saved in" in lines[1] and "--resume" in lines[1]
     assert json.loads((out / "summary.json").read_text())["partial"] is True
     assert run(config, out, "--resume").returncode == 0
     assert_same(out, reference)
@@ -158,6 +171,11 @@ def test_a_second_run_into_the_same_directory_is_refused(tmp_path: Path) -> None
         other = tmp_path / "other"
         assert run(config, other, "--resume").returncode == 2
         assert not other.exists()  # a refused run leaves nothing behind
+        # refused before its configuration is even read: no work at all
+        bad = tmp_path / "bad.toml"
+        bad.write_text("this is [not TOML")
+        second = run(bad, out)
+        assert second.returncode == 2 and "another vemwear run (pid" in second.stderr
     finally:
         first.send_signal(signal.SIGINT)
         first.communicate(timeout=60)
@@ -167,7 +185,13 @@ def test_stale_temporaries_are_reported_and_cleaned(tmp_path: Path) -> None:
     cfg = tmp_path / "case.toml"
     cfg.write_text(small_config("stale", output={"figures": False, "vtk": False}))
     out = tmp_path / "out"
-    assert run(cfg, out).returncode == 0
+    first = run(cfg, out)
+    assert first.returncode == 0
+    # the plan, always printed (one line), before the summary
+    assert re.search(
+        r"^vemwear: stale: memory \(estimate\) .+, disk \(estimate\) .+$",
+        (first.stdout.splitlines()[0]),
+    ), first.stdout
     stale_in = out / ".result.tmp-abcd1234.npz"  # what a killed atomic write leaves
     stale_in.write_bytes(b"x")
     stale_next = tmp_path / ".out.tmp-abcd1234"
@@ -180,6 +204,14 @@ def test_stale_temporaries_are_reported_and_cleaned(tmp_path: Path) -> None:
     other = tmp_path / "other"
     warn = run(cfg, other)
     assert warn.returncode == 0 and "temporary" not in warn.stderr
+    third = tmp_path / "third"
+    (tmp_path / ".third.tmp-abcd1234").mkdir()  # a killed atomic write of a third output
+    warn = run(cfg, third)
+    assert warn.returncode == 0
+    assert warn.stderr == (
+        f"vemwear: warning: 1 temporary file(s) of killed runs in or next to {third} (e.g. "
+        f".third.tmp-abcd1234); remove them with: vemwear clean {third}\n"
+    )
     clean = subprocess.run(
         [sys.executable, "-m", "vemwear", "clean", str(out)], capture_output=True, text=True
     )
@@ -214,6 +246,69 @@ def test_overshoot_warning(tmp_path: Path) -> None:
     assert "memory (estimate)" in check.stdout and "disk (estimate)" in check.stdout
 
 
+def test_wear_overflow_is_named_with_its_level(tmp_path: Path) -> None:
+    """kappa |v*| overflows: the warning says that no time step is safe, and the run stops
+    with exit code 3 at the first level whose wear is not finite, naming the wear."""
+    cfg = tmp_path / "case.toml"
+    cfg.write_text(small_config("overflow", contact={"kappa": 1e308, "v_star": [1e10, 0.0]}))
+    out = tmp_path / "out"
+    done = run(cfg, out)
+    assert done.returncode == 3, done.stderr
+    warning, error = done.stderr.splitlines()
+    assert warning.startswith("vemwear: warning: the explicit wear update can overshoot: ")
+    assert warning.endswith(
+        "No time step is safe: kappa |v*| L_p overflows; use data of a sensible scale"
+    )
+    assert error.startswith(
+        "vemwear: error: the wear is not finite at time level 1 (t = 0.125): inf at contact node 0"
+    ), error
+    assert "internal error" not in done.stderr and "Warning" not in done.stderr
+
+
+def test_resume_after_a_real_solver_failure(tmp_path: Path) -> None:
+    """Uzawa with 3 iterations fails at level 1 (exit 3, the level kept); the run goes on
+    with another max_iter and tol (recorded with the previous ones in summary.json), not
+    with another mu (refused with the list of changes)."""
+    text = small_config(
+        "uzawa",
+        steps=40,
+        solver={"method": "uzawa", "max_iter": 3},
+        loads={"f1": [0.0, "-0.06*t*t*t"]},
+    )
+    cfg = tmp_path / "case.toml"
+    cfg.write_text(text)
+    out = tmp_path / "out"
+    failed = run(cfg, out)
+    assert failed.returncode == 3, failed.stderr
+    assert failed.stderr.startswith(
+        "vemwear: error: the solver did not converge: Uzawa did not converge at time level 1 "
+    ), failed.stderr
+    assert f"the 1 finished time levels (of 41) are saved in {out}" in failed.stderr
+    assert json.loads((out / "summary.json").read_text())["completed"] == 1
+    better = text.replace("max_iter = 3", "tol = 1e-08\nmax_iter = 5000")
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    cfg.write_text(better.replace("mu = 0.2", "mu = 0.3"))
+    refused = run(cfg, out, "--resume")
+    assert refused.returncode == 2
+    assert "--resume refused" in refused.stderr and "[contact] mu: 0.2 -> 0.3" in refused.stderr
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # untouched
+    cfg.write_text(better)
+    done = run(cfg, out, "--resume")
+    assert done.returncode == 0, done.stderr
+    assert "resumed from level 1" in done.stdout
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["partial"] is False
+    assert summary["solver"] == {"method": "uzawa", "tol": 1e-8, "max_iter": 5000}
+    extra = summary["inputs"]["extra"]
+    assert extra["previous_solver"] == {"method": "uzawa", "tol": 1e-10, "max_iter": 3}
+    assert extra["resumed_from_level"] == 1
+    # the same numbers as a run with the new solver from the start, to its tolerance
+    assert run(cfg, tmp_path / "ref").returncode == 0
+    got, ref = arrays(out), arrays(tmp_path / "ref")
+    assert np.allclose(got["wear"], ref["wear"], rtol=0, atol=1e-7)
+    assert np.array_equal(got["wear"][0], ref["wear"][0])
+
+
 @pytest.mark.parametrize(
     ("section", "value", "code", "says"),
     [
@@ -221,6 +316,13 @@ def test_overshoot_warning(tmp_path: Path) -> None:
         # before any level is solved
         ("material", {"lam": 1e308}, 2, r"\[material\] lam = 1e\+308.*non-finite entries"),
         ("loads", {"f1": [0.0, -1e308]}, 3, "non-finite values at time level 0"),
+        # v* divides by zero at t = 0.5: refused with the file, before any work
+        (
+            "contact",
+            {"v_star": ["1/(t-0.5)", "0"]},
+            2,
+            r"\[contact\] v_star = \['1/\(t-0.5\)', '0'\] is not finite at t = 0.5 \(level 4\)",
+        ),
         ("time", {"steps": 1_000_000_000}, 2, "of memory"),
         ("mesh", {"generator": "voronoi", "n_cells": 100_000_000, "divisions": None}, 2, "memory"),
     ],
@@ -418,3 +520,89 @@ def test_out_of_memory_is_one_line_and_leaves_nothing(tmp_path: Path) -> None:
     assert done.returncode == 1, done.stderr
     assert done.stderr.count("\n") == 1 and "out of memory" in done.stderr, done.stderr
     assert not out.exists()
+
+
+def remount(disk: Path, options: str) -> None:
+    subprocess.run(["mount", "-o", f"remount,{options}", str(disk)], check=True)
+
+
+def test_a_mount_point_as_the_output_directory(
+    config: Path, small_disk: Path, reference: dict[str, np.ndarray]
+) -> None:
+    """A mount point (a Docker volume) is written into, never renamed or removed: by a
+    run, by --force, by a run killed with SIGKILL after a checkpoint and its --resume."""
+    remount(small_disk, "size=64m")
+    out = small_disk
+    done = run(config, out)
+    assert done.returncode == 0, done.stderr
+    assert os.path.ismount(out)
+    assert_same(out, reference)
+    (out / "notes.txt").write_text("mine")  # the user's own file in the volume
+    again = run(config, out, "--force")
+    assert again.returncode == 0, again.stderr
+    assert os.path.ismount(out) and (out / "notes.txt").read_text() == "mine"
+    assert_same(out, reference)
+    proc = start(config, out, "--force")
+    wait_for(out / "checkpoint.npz", proc)
+    time.sleep(0.3)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    assert os.path.ismount(out)
+    resumed = run(config, out, "--resume")
+    assert resumed.returncode == 0, resumed.stderr
+    assert "resumed from level" in resumed.stdout
+    assert os.path.ismount(out) and (out / "notes.txt").read_text() == "mine"
+    assert_same(out, reference)
+
+
+def test_a_read_only_mount_point_is_refused_and_nothing_is_written(
+    tmp_path: Path, small_disk: Path
+) -> None:
+    """A volume mounted read-only: a run into it (replacing an earlier output with
+    --force) or into a new directory on it is refused at once, exit code 2."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(small_config("ro", output={"figures": False, "vtk": False}))
+    assert run(cfg, small_disk).returncode == 0  # an earlier output in the volume
+    remount(small_disk, "ro")
+    before = {p.name: p.stat().st_mtime_ns for p in small_disk.iterdir()}
+    for target, extra in ((small_disk, ("--force",)), (small_disk / "new", ())):
+        done = run(cfg, target, *extra)
+        assert done.returncode == 2, done.stderr
+        assert done.stderr == (
+            f"vemwear: error: cannot write into {target}: {small_disk} is not writable\n"
+        )
+    assert {p.name: p.stat().st_mtime_ns for p in small_disk.iterdir()} == before
+    assert os.path.ismount(small_disk)
+
+
+def test_the_plan_refuses_with_the_numbers_of_check_and_resume_asks_only_for_the_rest(
+    config: Path, small_disk: Path, reference: dict[str, np.ndarray]
+) -> None:
+    """``run`` refuses with the disk estimate that ``check`` prints (the real mesh's); a
+    run that this estimate admits is not refused by the rough one made before the mesh
+    is built; a resumed run does not ask again for the disk its result.h5 occupies."""
+    check = subprocess.run(
+        [sys.executable, "-m", "vemwear", "check", str(config)], capture_output=True, text=True
+    )
+    assert check.returncode == 0, check.stderr
+    disk = re.search(r"disk \(estimate\) +(\d+) MB", check.stdout)
+    assert disk is not None, check.stdout
+    need = int(disk.group(1))
+    out = small_disk / "out"
+    remount(small_disk, f"size={(need - 2) * 10**6}")
+    refused = run(config, out)
+    assert refused.returncode == 2
+    said = re.search(r"the output needs about (\d+) MB of disk, (\d+) MB are free", refused.stderr)
+    assert said is not None and int(said.group(1)) == need, refused.stderr
+    assert "--force-size" in refused.stderr and not out.exists()
+    remount(small_disk, f"size={(need + 2) * 10**6}")
+    proc = start(config, out)
+    wait_for(out / "checkpoint.npz", proc)
+    time.sleep(0.3)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    # result.h5 holds every kept row already: less than the estimate is free now
+    assert shutil.disk_usage(small_disk).free < need * 1e6
+    resumed = run(config, out, "--resume")
+    assert resumed.returncode == 0, resumed.stderr
+    assert_same(out, reference)

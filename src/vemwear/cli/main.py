@@ -149,6 +149,14 @@ def _setup_example(p: argparse.ArgumentParser) -> None:
         help="example number: " + ", ".join(examples),
     )
     p.add_argument("--list", action="store_true", help="list the examples and exit")
+    p.add_argument(
+        "--order",
+        type=int,
+        choices=(1, 2),
+        default=1,
+        help="order k of the virtual element space (default 1, the paper's; 2 for "
+        "examples 5.2, 5.3, 5.4)",
+    )
     _common(p, solve=True, outdir_required=False)
     g = p.add_argument_group("Example 5.5 only")
     g.add_argument(
@@ -212,6 +220,13 @@ def _setup_manufactured(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--markdown", action="store_true", help="print a Markdown table")
     p.add_argument("--csv", metavar="FILE", help="also write the table as CSV to FILE")
+    p.add_argument(
+        "--order",
+        type=int,
+        choices=(1, 2),
+        default=1,
+        help="order k of the virtual element space (default 1; 2: expected orders H1 2, L2 3)",
+    )
     _common(p, solve=False)
     p.set_defaults(func=cmd_manufactured)
 
@@ -323,14 +338,21 @@ def _solver_options(base: SolverOptions, method: str | None) -> SolverOptions:
 
 # ---------------------------------------------------------------------------- commands
 def cmd_run(args: argparse.Namespace) -> int:
-    """``vemwear run CONFIG -o OUTDIR [--resume]``: validate, solve, write, summarize."""
+    """``vemwear run CONFIG -o OUTDIR [--resume]``: validate, solve, write, summarize.
+
+    The order keeps every refusal cheap: a locked OUTDIR before the file is read, the
+    rough plan before the mesh is built, the plan of the real mesh and the output
+    directory (taking its lock) before the stiffness is assembled."""
     from ..config import load_config
     from ..runner import abandon_run, execute_run, prepare_run, result_rows, smallness_report
-    from ..runner.outdir import stale_temporaries
-    from ..runner.plan import admit_sizes, estimate_config
+    from ..runner.outdir import refuse_locked, stale_temporaries
+    from ..runner.plan import admit_sizes, check_estimate, estimate_config
 
     t0 = time.perf_counter()
-    admit = admit_sizes(args.outdir, force_size=args.force_size)
+    refuse_locked(args.outdir)
+    # on --resume, the disk that result.h5 takes already is not asked for again
+    have = _resumed_bytes(args.outdir) if args.resume else 0
+    admit = admit_sizes(args.outdir, force_size=args.force_size, have=have)
     cfg = load_config(args.config, admit=admit)
     solver = _solver_options(cfg.solver, args.solver)
     if cfg.cycles is not None and args.resume:
@@ -342,7 +364,9 @@ def cmd_run(args: argparse.Namespace) -> int:
             f"{args.outdir} (e.g. {stale[0].name}); remove them with: vemwear clean {args.outdir}"
         )
     est = estimate_config(cfg)
-    plan = prepare_run(  # the output directory and the checkpoint, before solving
+    if not args.force_size:
+        check_estimate(est, args.outdir, str(args.config), have=have)
+    plan = prepare_run(  # the output directory, its lock and the checkpoint, before solving
         cfg,
         args.config,
         args.outdir,
@@ -350,18 +374,16 @@ def cmd_run(args: argparse.Namespace) -> int:
         force=args.force,
         resume=args.resume,
         solver_flag=args.solver,
-        need_bytes=0 if args.force_size else int(est.disk),
     )
     try:  # assembles the stiffness: may fail before any level, like the run
         _, warning = smallness_report(cfg.problem)
+        for w in [warning, *_overshoot(cfg)]:
+            if w:
+                say(f"{PROG}: warning: {w}")
+        print(f"{PROG}: {cfg.title}: " + ", ".join(f"{k} {v}" for k, v in est.rows()), flush=True)
     except BaseException:
         abandon_run(plan)
         raise
-    for w in [warning, *_overshoot(cfg)]:
-        if w:
-            say(f"{PROG}: warning: {w}")
-    if not args.no_progress:
-        say(f"{PROG}: {cfg.title}: " + ", ".join(f"{k} {v}" for k, v in est.rows()))
     if cfg.cycles is not None:
         from ..runner.cycles import execute_cycles
         from ..runner.describe import part_wear_rows
@@ -400,17 +422,32 @@ def cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _resumed_bytes(outdir: str | Path) -> int:
+    """The disk that the ``result.h5`` a resumed run goes on writing occupies already (its
+    allocated blocks; 0 if there is none)."""
+    from ..post.stream import STREAM_NAME
+
+    try:
+        st = (Path(outdir).expanduser() / STREAM_NAME).stat()
+    except OSError:
+        return 0
+    return min(st.st_size, 512 * st.st_blocks)
+
+
 def cmd_check(args: argparse.Namespace) -> int:
     """``vemwear check CONFIG``: validate and describe the problem, no solve."""
     from ..config import load_config
     from ..runner import check_rows, smallness_report
-    from ..runner.plan import admit_sizes, estimate_config
+    from ..runner.plan import admit_sizes, check_estimate, estimate_config
 
     cfg = load_config(args.config, admit=admit_sizes(force_size=args.force_size))
+    est = estimate_config(cfg)
+    if not args.force_size:  # the memory of the real mesh, as ``vemwear run`` checks it
+        check_estimate(est, None, str(args.config))
     rows = check_rows(cfg)
     row, warning = smallness_report(cfg.problem)
     rows.append(("smallness (Thm 3.4)", row))
-    rows += estimate_config(cfg).rows()
+    rows += est.rows()
     print(f"{PROG}: {args.config}: {cfg.title}: valid\n" + rows_text(rows))
     for w in [warning, *_overshoot(cfg)]:
         if w:
@@ -449,6 +486,10 @@ def cmd_example(args: argparse.Namespace) -> int:
 
     mod = load_example(args.name)
     extra = _example_extra(args)
+    if args.order != 1:
+        if args.name == "5.5":
+            raise UsageError("--order 2: for examples 5.2, 5.3 and 5.4 (not 5.5 yet)")
+        extra["order"] = args.order
     out = check_output_dir(args.outdir, args.force)
     if args.name == "5.5":
         extra["cache"] = (
@@ -550,7 +591,7 @@ def cmd_manufactured(args: argparse.Namespace) -> int:
 
     fams = args.families or [f for f in DEFAULT_FAMILIES if f in available_families()]
     t0 = time.perf_counter()
-    rows = convergence_study(fams, levels=args.levels, n0=args.n0)
+    rows = convergence_study(fams, levels=args.levels, n0=args.n0, order=args.order)
     print(table_text(rows, markdown=args.markdown), end="")
     if args.csv:
         from ..util.atomic import write_atomic
@@ -559,7 +600,7 @@ def cmd_manufactured(args: argparse.Namespace) -> int:
     sys.stdout.flush()
     say(
         f"{PROG}: manufactured: {len(fams)} families x {args.levels} levels in "
-        f"{time.perf_counter() - t0:.1f} s; H1 = ||grad(Pi u_h) - grad u||, "
+        f"{time.perf_counter() - t0:.1f} s (k = {args.order}); H1 = ||grad(Pi u_h) - grad u||, "
         "L2 = ||Pi u_h - u||, nodal = cell-weighted nodal L2 error"
     )
     return EXIT_OK
@@ -586,6 +627,8 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
         )
     ):
         return EXIT_INPUT, str(exc)
+    if _is(exc, "vemwear.simulate.levels", "WearOverflowError"):
+        return EXIT_CONVERGENCE, str(exc)
     if _is(exc, "vemwear.solvers.system", "FactorizationError"):
         return EXIT_CONVERGENCE, f"the solver failed: {exc}"
     if _is(exc, "vemwear.solvers.system", "ConvergenceError"):

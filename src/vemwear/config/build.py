@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..contact import arc_length, table_values
+from ..contact import arc_length, table_values, velocity_levels
 from ..mesh import Mesh, MeshError, read_mesh, select_parts
 from ..mesh.registry import family
 from ..simulate import Problem, SolverOptions, TimeGrid
@@ -90,7 +90,8 @@ class Config:
 
 @dataclass(frozen=True)
 class Sizes:
-    """The sizes of a run, known from the configuration before anything is built.
+    """The sizes of a run known from the configuration before anything is built, each a
+    lower bound of the real one (:mod:`vemwear.runner.plan`).
 
     Attributes
     ----------
@@ -99,9 +100,10 @@ class Sizes:
     levels : int
         Time levels L.
     cells : int
-        About how many cells the mesh has.
+        The cells the generator makes (0 for a mesh file: not known before it is read).
     kept, stored_u : int
-        Kept contact rows and stored displacements.
+        Kept contact rows (at least ``ceil(L / every)``) and stored displacements (those
+        ``store_u`` certainly asks for).
     paraview : bool
         Whether a ParaView series is written.
     """
@@ -114,7 +116,7 @@ class Sizes:
     paraview: bool
 
 
-def _sizes(src: str, c: s.ConfigFile, base_dir: Path) -> Sizes:
+def _sizes(src: str, c: s.ConfigFile) -> Sizes:
     t = c.time
     if isinstance(t, s.Steps):
         L = t.steps + 1
@@ -125,22 +127,16 @@ def _sizes(src: str, c: s.ConfigFile, base_dir: Path) -> Sizes:
     else:
         L = len(t.dt) + 1
     m = c.mesh
-    if isinstance(m, s.MeshFile):
-        path = Path(m.file).expanduser()
-        path = path if path.is_absolute() else base_dir / path
-        cells = path.stat().st_size // 64 if path.is_file() else 0
-    else:
+    cells = 0
+    if not isinstance(m, s.MeshFile):
         cells = family(m.generator).estimate_cells(m.model_dump(exclude_unset=True))
     store, out = c.output.store_u, c.output
-    if store is None:
-        stored = len(out.times or (1, 2, 3, 4)) + 1
-    elif isinstance(store, str):
-        stored = L if store == "all" else 1
-    elif isinstance(store, int):
-        stored = L // store + 1
-    else:
-        stored = len(store) + 1
-    kept = min(L, L // out.every + 1 + stored)
+    stored = 1  # the final level; times and a list may fall on fewer levels than given
+    if store == "all":
+        stored = L
+    elif isinstance(store, int) and not isinstance(store, bool):
+        stored = -(-L // store)
+    kept = max(-(-L // out.every), stored)
     return Sizes(src, L, int(cells), kept, min(stored, L), out.vtk)
 
 
@@ -199,6 +195,13 @@ class VelocityExpression:
 
     def __call__(self, t: float) -> NDArray[np.float64]:
         return np.array([float(_value(c, {"t": np.array([float(t)])})[0]) for c in self.parts])
+
+    def at_times(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``v(t)`` at many times at once: (len(t), 2)."""
+        ts = np.asarray(t, dtype=float).ravel()
+        return np.column_stack(
+            [np.broadcast_to(_value(c, {"t": ts}), ts.shape) for c in self.parts]
+        )
 
 
 def _value(c: Expression | float, env: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
@@ -346,6 +349,7 @@ def _problem(
             f1=_data(c.loads.f1, FieldExpression, loads.get("f1")),
             f2=f2,
             stabilization=c.vem.stabilization,
+            order=c.vem.order,
             clamped=parts.clamped,
             displacement=tuple(parts.displacement),
             contacts=contacts,
@@ -362,6 +366,25 @@ def _problem(
     except ValueError as exc:
         section = "[contact]" if single else "[[contact]]"
         raise from_library(exc, src, section, rt if single else {}) from None
+
+
+def _check_velocity(src: str, pr: Problem, parts: Roles) -> None:
+    """``v_star`` is a finite 2-vector at every time level (an expression or a table of t
+    may overflow or divide by zero)."""
+    where = {name: path for name, _, _, path in parts.contacts}
+    t = pr.time.t
+    for pc in pr.parts:
+        with np.errstate(all="ignore"):
+            V = velocity_levels(pc.velocity, t)
+        bad = np.flatnonzero(~np.all(np.isfinite(V), axis=1))
+        if bad.size:
+            n = int(bad[0])
+            spec = pc.velocity.spec
+            text = f" = {spec.__name__}" if isinstance(spec, VelocityExpression) else ""
+            raise ConfigError(
+                f"{src}: {where.get(pc.part, '[contact]')} v_star{text} is not finite at t = "
+                f"{t[n]:g} (level {n}): v* = ({V[n, 0]:g}, {V[n, 1]:g})"
+            )
 
 
 def _check_loads(src: str, pr: Problem, parts: Roles) -> None:
@@ -472,7 +495,7 @@ def parse_config(
     except ValidationError as exc:
         raise from_validation(exc, src) from None
     if admit is not None:
-        admit(_sizes(src, c, Path(base_dir)))
+        admit(_sizes(src, c))
     raw: dict[str, Any] = copy.deepcopy(dict(data))  # valid, so plain TOML types only
     with at(src, "[material]"):
         material = Material(c.material.lam, c.material.eta)
@@ -501,6 +524,7 @@ def parse_config(
     else:
         where = f"[mesh] file {c.mesh.file!r}:"
     problem = _problem(src, c, raw, parts, mesh, material, grid, where)
+    _check_velocity(src, problem, parts)
     _check_loads(src, problem, parts)
     title = c.title if c.title is not None else Path(source).stem
     cycles = None

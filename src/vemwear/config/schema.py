@@ -307,6 +307,14 @@ class Vem(Section):
         description="weight of the dofi-dofi stabilization: 'paper' (1, as in the paper), "
         "'eta' (2 eta) or 'trace' (trace of the consistency matrix / n_dof)",
     )
+    order: int = Field(
+        _default(Problem, "order"),
+        ge=1,
+        le=2,
+        description="order k of the virtual element space: 1 (the paper's examples: vertex "
+        "values) or 2 (vertex values, edge and cell means; contact at the vertices and edge "
+        "midpoints of Gamma_C with Simpson's weights)",
+    )
 
 
 # ---------------------------------------------------------------------------- time

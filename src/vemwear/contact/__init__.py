@@ -10,7 +10,7 @@ from .law import (
     as_law,
     check_law,
 )
-from .parts import ContactPart, NodalLaw, tangential_velocity
+from .parts import ContactPart, NodalLaw, tangential_velocity, velocity_levels
 
 __all__ = [
     "CallableCompliance",
@@ -29,4 +29,5 @@ __all__ = [
     "nodal_values",
     "table_values",
     "tangential_velocity",
+    "velocity_levels",
 ]

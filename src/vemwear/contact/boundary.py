@@ -7,6 +7,12 @@ the closure of Gamma_D, or with both components prescribed). Node ``a`` has the 
 the unit tangent ``tau_a = (-nu_y, nu_x)``. Gamma_C may have several parts: the nodes
 are ordered part by part, along the chains of each part's edges; a vertex shared by two
 contact parts belongs to the first (its weight and normal take the edges of both).
+
+For k = 2 (:func:`contact_boundary` with a :class:`~vemwear.vem.space.P2Space`) the edge
+midpoints of Gamma_C are contact nodes too, between the vertices along each chain, with
+the edge normal and Simpson's weights (``sum |e| / 6`` at a vertex, ``4 |e| / 6`` at a
+midpoint), and :attr:`ContactBoundary.trace` gives the displacement at every node from
+the dofs (docs/method.md, section 9, "Contact for k = 2").
 """
 
 from __future__ import annotations
@@ -18,6 +24,8 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..mesh.polymesh import Mesh, MeshError
+from ..vem.dofs2 import edge_ids
+from ..vem.space import Space
 
 
 @dataclass(frozen=True, eq=False)
@@ -26,7 +34,8 @@ class ContactBoundary:
 
     Attributes
     ----------
-    nodes : (m,) vertex ids, ordered along each chain of contact edges
+    nodes : (m,) vertex ids, ordered along each chain of contact edges; for k = 2 an
+        edge midpoint is ``n_points + e``, ``e`` the row of :attr:`Mesh.edges`
     points : (m, 2) their coordinates
     s : (m,) arc length from the start of the node's chain
     weights : (m,) omega_a
@@ -34,6 +43,9 @@ class ContactBoundary:
     n_dof : number of global dofs (2 * n_points)
     part : (m,) index of the node's contact part in ``part_names``
     part_names : the contact parts, in order
+    trace : (2 m, n_dof) sparse, optional
+        Rows ``2 a + c``: component c of the displacement at node a from the dofs; None
+        for k = 1, where node a is vertex ``nodes[a]`` and the rows pick its two dofs.
     """
 
     nodes: NDArray[np.int64]
@@ -45,6 +57,7 @@ class ContactBoundary:
     n_dof: int
     part: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     part_names: tuple[str, ...] = ("contact",)
+    trace: sp.csr_matrix | None = None
 
     def __post_init__(self) -> None:
         if len(self.part) != len(self.nodes):
@@ -55,6 +68,10 @@ class ContactBoundary:
         return len(self.nodes)
 
     def _component_operator(self, direction: NDArray[np.float64]) -> sp.csr_matrix:
+        if self.trace is not None:
+            T = self.trace
+            op = sp.diags(direction[:, 0]) @ T[0::2] + sp.diags(direction[:, 1]) @ T[1::2]
+            return sp.csr_matrix(op)
         rows = np.repeat(np.arange(self.m), 2)
         cols = np.column_stack([2 * self.nodes, 2 * self.nodes + 1]).ravel()
         return sp.csr_matrix((direction.ravel(), (rows, cols)), shape=(self.m, self.n_dof))
@@ -138,6 +155,8 @@ def contact_boundary(
     mesh: Mesh,
     parts: tuple[str, ...] = ("contact",),
     fixed: NDArray[np.bool_] | None = None,
+    space: Space | None = None,
+    constrained: NDArray[np.bool_] | None = None,
 ) -> ContactBoundary:
     """Build the contact data of the parts ``parts`` of a tagged mesh.
 
@@ -148,8 +167,15 @@ def contact_boundary(
         The contact parts, in order.
     fixed : (n_points,) bool array, optional
         Vertices that are no contact nodes (both components prescribed); by default
-        the vertices of the ``clamped`` part.
+        the vertices of the ``clamped`` part (k = 1).
+    space : Space, optional
+        The virtual element space; k = 1 (the vertices only) when None or of order 1.
+    constrained : (space.n_dofs,) bool array, optional
+        For k >= 2: the constrained dofs; a node whose displacement depends on
+        constrained dofs only is no contact node (by default the dofs of ``clamped``).
     """
+    if space is not None and space.order >= 2:
+        return _contact_boundary_k2(mesh, parts, space, constrained)
     P = mesh.points
     nv = mesh.n_points
     per_part = [mesh.part_edges(name) for name in parts]
@@ -194,4 +220,99 @@ def contact_boundary(
         n_dof=2 * nv,
         part=np.concatenate(part_l),
         part_names=tuple(parts),
+    )
+
+
+def _contact_boundary_k2(
+    mesh: Mesh,
+    parts: tuple[str, ...],
+    space: Space,
+    constrained: NDArray[np.bool_] | None,
+) -> ContactBoundary:
+    """The contact nodes of k = 2: along each chain, every vertex followed by the
+    midpoint of its outgoing edge; Simpson's weights; the trace operator of ``space``."""
+    P, nv = mesh.points, mesh.n_points
+    per_part = [mesh.part_edges(name) for name in parts]
+    for name, pe in zip(parts, per_part, strict=True):
+        if len(pe) == 0:
+            raise MeshError(f"the mesh has no {name!r} boundary edges")
+    edges = np.concatenate(per_part)
+    first = np.cumsum([0, *(len(pe) for pe in per_part)])
+    d = P[edges[:, 1]] - P[edges[:, 0]]
+    length = np.linalg.norm(d, axis=1)
+    nrm = np.column_stack([d[:, 1], -d[:, 0]]) / length[:, None]
+    w_vertex, w_mid = space.trace_weights(edges)
+    nsum = np.zeros((nv, 2))
+    np.add.at(nsum, edges[:, 0], nrm)
+    np.add.at(nsum, edges[:, 1], nrm)
+    taken = np.zeros(nv, dtype=bool)
+    ids_l, arc_l, part_l, mid_l = [], [], [], []
+    for i, pe in enumerate(per_part):
+        order, arc = _chains(pe, P, nv)
+        out_edge = -np.ones(nv, dtype=np.int64)
+        out_edge[pe[:, 0]] = np.arange(len(pe))
+        se = out_edge[order]  # the edge leaving each vertex of the chain (-1 at its end)
+        keep_v = ~taken[order]
+        taken[order] = True
+        n = len(order)
+        # positions 2 j (vertex j) and 2 j + 1 (midpoint of its outgoing edge)
+        ids = np.empty(2 * n, dtype=np.int64)
+        ids[0::2] = order
+        ids[1::2] = first[i] + np.maximum(se, 0)  # a row of `edges` (a midpoint)
+        s = np.empty(2 * n)
+        s[0::2] = arc
+        s[1::2] = arc + 0.5 * length[ids[1::2]]
+        is_mid = np.zeros(2 * n, dtype=bool)
+        is_mid[1::2] = True
+        keep = np.empty(2 * n, dtype=bool)
+        keep[0::2], keep[1::2] = keep_v, se >= 0
+        ids_l.append(ids[keep])
+        arc_l.append(s[keep])
+        mid_l.append(is_mid[keep])
+        part_l.append(np.full(int(keep.sum()), i, dtype=np.int64))
+    ids, s, is_mid = np.concatenate(ids_l), np.concatenate(arc_l), np.concatenate(mid_l)
+    part = np.concatenate(part_l)
+    verts, mids = ids[~is_mid], ids[is_mid]
+    T = space.trace_operator(verts, edges[mids])  # rows: the vertices, then the midpoints
+    pos = np.empty(len(ids), dtype=np.int64)
+    pos[~is_mid] = np.arange(len(verts))
+    pos[is_mid] = len(verts) + np.arange(len(mids))
+    T = sp.csr_matrix(T[np.column_stack([2 * pos, 2 * pos + 1]).ravel()])
+    if constrained is None:
+        constrained = np.zeros(space.n_dofs, dtype=bool)
+        if "clamped" in mesh.part_names:
+            for dofs in space.component_dofs(mesh.part_edges("clamped")):
+                constrained[dofs] = True
+    # a node whose displacement is prescribed in both components is no contact node
+    loose = abs(T) @ (~np.asarray(constrained, dtype=bool)).astype(float) > 0
+    keep = loose.reshape(-1, 2).any(axis=1)
+    if not np.any(keep):
+        raise MeshError("every contact vertex is also clamped: no contact node is left")
+    ids, s, is_mid, part = ids[keep], s[keep], is_mid[keep], part[keep]
+    T = sp.csr_matrix(T[np.column_stack([keep, keep]).ravel()])
+    mid_edges = edges[ids[is_mid]]
+    nodes = ids.copy()
+    nodes[is_mid] = nv + edge_ids(mesh, mid_edges[:, 0], mid_edges[:, 1])
+    points = np.empty((len(ids), 2))
+    points[~is_mid] = P[ids[~is_mid]]
+    points[is_mid] = 0.5 * (P[mid_edges[:, 0]] + P[mid_edges[:, 1]])
+    weights = np.empty(len(ids))
+    weights[~is_mid] = w_vertex[ids[~is_mid]]
+    weights[is_mid] = w_mid[ids[is_mid]]
+    normals = np.empty((len(ids), 2))
+    nv_sum = nsum[ids[~is_mid]]
+    normals[~is_mid] = nv_sum / np.linalg.norm(nv_sum, axis=1)[:, None]
+    normals[is_mid] = nrm[ids[is_mid]]
+    tangents = np.column_stack([-normals[:, 1], normals[:, 0]])
+    return ContactBoundary(
+        nodes=nodes,
+        points=points,
+        s=s,
+        weights=weights,
+        normals=normals,
+        tangents=tangents,
+        n_dof=space.n_dofs,
+        part=part,
+        part_names=tuple(parts),
+        trace=T,
     )

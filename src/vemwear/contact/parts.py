@@ -9,7 +9,7 @@ contact node belongs to one part (:attr:`ContactBoundary.part`), and
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from .data import FoundationVelocity, NodalField
 from .law import ComplianceLaw, LinearCompliance
 
-__all__ = ["ContactPart", "NodalLaw", "tangential_velocity"]
+__all__ = ["ContactPart", "NodalLaw", "tangential_velocity", "velocity_levels"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,3 +111,23 @@ def tangential_velocity(
     V = np.array([pc.velocity(t) for pc in parts])  # (n_parts, 2)
     v = V[part]
     return np.asarray(v[:, 0] * tangents[:, 0] + v[:, 1] * tangents[:, 1], dtype=np.float64)
+
+
+def velocity_levels(v: FoundationVelocity, t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``v*(t_n)`` at many times at once, (len(t), 2), not checked for being finite.
+
+    Numbers and tables of t are evaluated in one go, as is a callable with a method
+    ``at_times(t)`` (the expressions of a configuration file); any other callable one
+    time at a time.
+    """
+    ts = np.asarray(t, dtype=float).ravel()
+    s = v.spec
+    if callable(s):
+        many = getattr(s, "at_times", None)
+        if many is not None:
+            return np.asarray(many(ts), dtype=float).reshape(len(ts), 2)
+        return np.array([np.asarray(s(x), dtype=float) for x in ts]).reshape(len(ts), 2)
+    if isinstance(s, Mapping):
+        at, vals = np.asarray(s["t"], dtype=float), np.asarray(s["values"], dtype=float)
+        return np.column_stack([np.interp(ts, at, vals[:, 0]), np.interp(ts, at, vals[:, 1])])
+    return np.broadcast_to(np.asarray(s, dtype=float).reshape(2), (len(ts), 2)).copy()

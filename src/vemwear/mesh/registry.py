@@ -94,7 +94,8 @@ class Family:
             return len(merged["seeds"])
         if merged.get("n_cells") is not None:
             return int(merged["n_cells"])
-        nx, ny = merged.get("divisions") or (1, 1)
+        d = merged.get("divisions") or (1, 1)
+        nx, ny = (d, 1) if isinstance(d, int) else d  # one count (hexagons): at least a row
         return int(nx) * int(ny) * max(self.cells_per_division, 1)
 
     def option(self, name: str) -> Option | None:

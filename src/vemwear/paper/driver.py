@@ -22,6 +22,7 @@ import inspect
 import os
 import time
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -64,6 +65,7 @@ def run_example(
     figures: bool = True,
     vtk: bool | None = None,
     log: Callable[[str], None] | None = None,
+    order: int = 1,
     **parameters: Any,
 ) -> ExampleRun:
     """Run an example and write everything into the existing directory ``outdir``.
@@ -85,6 +87,8 @@ def run_example(
         Write the runs' VTK series (default: the example's choice).
     log : callable, optional
         Receives one line of text per stage.
+    order : int
+        The order k of the virtual element space of every problem (1: the paper's).
     **parameters
         The example's parameters (:attr:`Example.parameters`: sizes, levels, ...);
         the paper's values by default.
@@ -121,6 +125,8 @@ def run_example(
     )
     with _timed(ctx, "problems"):
         ctx.problems = call_with(ex.problems, params)
+        if order != 1:
+            ctx.problems = {n: replace(pr, order=order) for n, pr in ctx.problems.items()}
     if ex.prepare is not None:
         ex.prepare(ctx)
     for name, pr in ctx.problems.items():

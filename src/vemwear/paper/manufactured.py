@@ -28,6 +28,13 @@ triangulation of every cell: ``H1``: ``||grad(Pi u_h) - grad u||_{L2}`` (expecte
 1); ``L2``: ``||Pi u_h - u||_{L2}`` (expected order 2); ``nodal``: the cell-weighted
 nodal L2 error (order 2). Orders use the mean cell size ``sqrt(|Omega| / n_cells)``,
 which halves with every level for all families.
+
+With ``order=2`` the same study runs on the second-order space (:class:`vemwear.vem.space.
+P2Space`): u imposed on Gamma_D through its dofs there (vertex values and edge means), the
+load of ``load_rule`` (``"projection"`` by default: ``int f1 . Pi v``, whose consistency
+error is O(h^3); the paper's P_0 load of Section 3.3 limits the L2 order to 2 for k = 2,
+docs/method.md, section 9), and the errors of the quadratic ``Pi u_h`` (expected orders:
+H1 2, L2 3; nodal 3 on the vertex values).
 """
 
 from __future__ import annotations
@@ -46,6 +53,9 @@ from numpy.typing import NDArray
 from ..mesh import Mesh, tag_rectangle
 from ..post.norms import exact_errors
 from ..vem import Material, body_force_vector, edge_load_vector, stiffness
+from ..vem.dofs2 import interpolate2
+from ..vem.quadrature import polygon_quadrature
+from ..vem.space import P2Space
 
 __all__ = [
     "DEFAULT_FAMILIES",
@@ -56,10 +66,12 @@ __all__ = [
     "body_force",
     "convergence_study",
     "exact_displacement",
+    "exact_errors2",
     "exact_gradient",
     "exact_stress",
     "family_mesh",
     "solve",
+    "solve2",
     "table_csv",
     "table_text",
     "traction",
@@ -208,6 +220,66 @@ def solve(
     return u.reshape(-1, 2)
 
 
+def solve2(
+    mesh: Mesh,
+    material: Material | None = None,
+    stabilization: str = "paper",
+    load_rule: str = "projection",
+) -> NDArray[np.float64]:
+    """As :func:`solve` with the second-order space: all dofs of ``u_h`` (k = 2), with
+    the dofs of u (vertex values, edge means) imposed on Gamma_D.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    material : Material, optional
+    stabilization : str
+    load_rule : {"projection", "paper"}
+        The body-force load (:func:`vemwear.vem.dofs2.body_force_vector2`).
+    """
+    mat = material if material is not None else Material(lam=LAM, eta=ETA)
+
+    def f1(x: NDArray[np.float64], t: float) -> NDArray[np.float64]:
+        return body_force(x, t, mat.lam, mat.eta)
+
+    def f2(x: NDArray[np.float64], t: float) -> NDArray[np.float64]:
+        return traction(x, t, mat.lam, mat.eta)
+
+    V = P2Space(mesh, load_rule=load_rule)
+    K = V.stiffness(mat, stabilization).tocsr()
+    F = V.body_force(f1) + V.boundary_load(mesh.part_edges("traction"), f2)
+    fixed = np.zeros(V.n_dofs, dtype=bool)
+    for d in V.component_dofs(mesh.part_edges("clamped")):
+        fixed[d] = True
+    u = np.where(fixed, interpolate2(mesh, lambda x, t: exact_displacement(x)), 0.0)
+    free = np.flatnonzero(~fixed)
+    rhs = F[free] - K[free][:, fixed] @ u[fixed]
+    u[free] = spla.spsolve(K[free][:, free].tocsc(), rhs)
+    return u
+
+
+def exact_errors2(mesh: Mesh, uh: NDArray[np.float64], material: Material) -> dict[str, float]:
+    """The errors of :func:`vemwear.post.norms.exact_errors` for k = 2: of the quadratic
+    ``Pi u_h`` (3.8) on the degree-5 rule, and the nodal error of the vertex values."""
+    V = P2Space(mesh)
+    x, w, cell = polygon_quadrature(mesh, 5)
+    val, grad = V.projection(material, uh).at(x, cell)
+    ue, ge = exact_displacement(x), exact_gradient(x)
+    U = V.vertex_values(uh)
+    nod = np.sum((U - exact_displacement(mesh.points)) ** 2, axis=1)
+    per_cell = (
+        np.bincount(mesh.edge_cells, weights=nod[mesh.cell_vertices], minlength=mesh.n_cells)
+        / mesh.cell_sizes
+    )
+    return {
+        "L2": math.sqrt(float(np.sum(w * np.sum((val - ue) ** 2, axis=1)))),
+        "H1semi": math.sqrt(float(np.sum(w * np.sum((grad - ge) ** 2, axis=(1, 2))))),
+        "nodal": math.sqrt(float(np.sum(mesh.cell_areas * per_cell))),
+        "L2_u": math.sqrt(float(np.sum(w * np.sum(ue**2, axis=1)))),
+        "H1semi_u": math.sqrt(float(np.sum(w * np.sum(ge**2, axis=(1, 2))))),
+    }
+
+
 # ----------------------------------------------------------------------------- study
 def convergence_study(
     families: Sequence[str] = DEFAULT_FAMILIES,
@@ -216,13 +288,16 @@ def convergence_study(
     *,
     stabilization: str = "paper",
     log: Callable[[str], None] | None = None,
+    order: int = 1,
+    load_rule: str = "projection",
 ) -> list[dict[str, Any]]:
-    """Errors and orders on ``levels`` successive meshes ``n = n0, 2 n0, ...`` per family.
+    """Errors and orders on ``levels`` successive meshes ``n = n0, 2 n0, ...`` per family,
+    with the space of order ``order`` (1 or 2; ``load_rule`` of :func:`solve2` for 2).
 
     Returns
     -------
     list of dict
-        One row per (family, level): ``family``, ``n``, ``cells``, ``dofs``, ``h``
+        One row per (family, level): ``family``, ``order``, ``n``, ``cells``, ``dofs``, ``h``
         (largest cell diameter), ``h_mean`` (``sqrt(1 / cells)``), the errors ``H1``,
         ``L2``, ``nodal`` (absolute; ``H1_rel``, ``L2_rel`` relative to the norms of u),
         their orders ``H1_order``, ``L2_order``, ``nodal_order`` (NaN on the first level)
@@ -230,6 +305,9 @@ def convergence_study(
     """
     if levels < 1 or n0 < 1:
         raise ValueError(f"levels and n0 must be positive, got {levels}, {n0}")
+    if order not in (1, 2):
+        raise ValueError(f"order must be 1 or 2, got {order!r}")
+    mat = Material(lam=LAM, eta=ETA)
     rows: list[dict[str, Any]] = []
     for fam in families:
         prev: dict[str, Any] | None = None
@@ -237,13 +315,20 @@ def convergence_study(
             n = int(n0) * 2**i
             t0 = time.perf_counter()
             mesh = family_mesh(fam, n)
-            uh = solve(mesh, stabilization=stabilization)
-            e = exact_errors(mesh, uh, exact_displacement, exact_gradient)
+            if order == 1:
+                uh = solve(mesh, stabilization=stabilization)
+                e = exact_errors(mesh, uh, exact_displacement, exact_gradient)
+                dofs = 2 * mesh.n_points
+            else:
+                uh = solve2(mesh, mat, stabilization, load_rule)
+                e = exact_errors2(mesh, uh, mat)
+                dofs = uh.size
             row: dict[str, Any] = {
                 "family": fam,
+                "order": order,
                 "n": n,
                 "cells": mesh.n_cells,
-                "dofs": 2 * mesh.n_points,
+                "dofs": dofs,
                 "h": mesh.h,
                 "h_mean": math.sqrt(1.0 / mesh.n_cells),
                 "H1": e["H1semi"],
@@ -335,6 +420,7 @@ def table_csv(rows: Sequence[dict[str, Any]]) -> str:
         "H1_rel",
         "L2_rel",
         "seconds",
+        "order",
     ]
     buf = io.StringIO()
     wr = csv.writer(buf, lineterminator="\n")

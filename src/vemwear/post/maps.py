@@ -174,7 +174,9 @@ def _rigid_layer(
     g = np.asarray(result.problem.nodal["g"])
     nu_nodes = np.asarray(result.problem.contact.normals)
     where = np.full(len(P), -1, dtype=np.int64)
-    where[np.asarray(result.contact_nodes)] = np.arange(len(g))
+    cn = np.asarray(result.contact_nodes)
+    vert = cn < len(P)  # k = 2: the edge midpoints (ids >= n_points) are not vertices
+    where[cn[vert]] = np.flatnonzero(vert)
     d = P[edges[:, 1]] - P[edges[:, 0]]
     nu_edge = np.column_stack([d[:, 1], -d[:, 0]]) / np.linalg.norm(d, axis=1)[:, None]
     idx = where[edges]  # (E, 2)

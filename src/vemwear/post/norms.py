@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polymesh import Mesh
+from ..vem.dofs2 import edge_ids
 from ..vem.projection import LinearFields, Projection
 from ..vem.quadrature import polygon_moments, polygon_quadrature
 
@@ -200,15 +201,17 @@ def nested_difference_norms_sq(
 def contact_l2_norm(
     mesh: Mesh, contact_nodes: ArrayLike, w: ArrayLike, quadrature: str = "exact"
 ) -> float:
-    """``||w||_{L2(Gamma_C)}`` of the piecewise linear function with nodal values ``w``.
+    """``||w||_{L2(Gamma_C)}`` of the piecewise linear function with nodal values ``w``
+    (piecewise quadratic for the contact nodes of k = 2, vertices and edge midpoints).
 
     Parameters
     ----------
     mesh : Mesh
         With its ``contact`` edges.
     contact_nodes : (m,) int array_like
-        Vertex ids carrying the values ``w``; other vertices of contact edges (the
-        clamped end of Gamma_C) carry 0.
+        Vertex ids carrying the values ``w`` (k = 2: ``n_points + e`` the midpoint of
+        the edge ``mesh.edges[e]``); other nodes of contact edges (the clamped end of
+        Gamma_C) carry 0.
     w : (m,) array_like
     quadrature : {"exact", "nodal"}
         Exact integral of the square of a linear function on every edge,
@@ -220,11 +223,19 @@ def contact_l2_norm(
     wv = np.asarray(w, dtype=float)
     if wv.shape != nodes.shape:
         raise ValueError(f"w has shape {wv.shape}, expected {nodes.shape}")
-    full = np.zeros(mesh.n_points)
+    n = mesh.n_points
+    full = np.zeros(n + (len(mesh.edges) if np.any(nodes >= n) else 0))
     full[nodes] = wv
     e = mesh.part_edges("contact")
     L = np.linalg.norm(mesh.points[e[:, 1]] - mesh.points[e[:, 0]], axis=1)
     a, b = full[e[:, 0]], full[e[:, 1]]
+    if len(full) > n:  # k = 2: nodes n + i are the midpoints of mesh.edges[i]; quadratic w
+        c = full[n + edge_ids(mesh, e[:, 0], e[:, 1])]
+        if quadrature == "exact":  # the P2 mass matrix L / 30 [[4, 2, -1], [2, 16, 2], ...]
+            s = L * (4 * a * a + 16 * c * c + 4 * b * b + 4 * a * c + 4 * c * b - 2 * a * b) / 30
+        else:  # Simpson's rule, the contact quadrature of k = 2
+            s = L * (a * a + 4 * c * c + b * b) / 6.0
+        return math.sqrt(float(s.sum()))
     s = L * (a * a + a * b + b * b) / 3.0 if quadrature == "exact" else L * (a * a + b * b) / 2.0
     return math.sqrt(float(s.sum()))
 

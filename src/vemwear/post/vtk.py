@@ -109,6 +109,8 @@ def level_fields(
     mesh = result.problem.mesh
     n = mesh.n_points
     nodes = np.asarray(result.contact_nodes)
+    vert = nodes < n  # k = 2: the vertex values only (edge midpoints are ids >= n)
+    nodes = nodes[vert]
     u = np.asarray(result.displacement(level))
     disp = np.zeros((n, 3))
     disp[:, :2] = u
@@ -121,7 +123,7 @@ def level_fields(
         ("p", result.p_soft),
     ):
         full = np.zeros(n)
-        full[nodes] = np.asarray(arr[level])
+        full[nodes] = np.asarray(arr[level])[vert]
         point_data[key] = full
     contact = np.zeros(n)
     contact[nodes] = 1.0

@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..util.atomic import atomic_file
-from .outdir import output_lock, write_marker
-from .run import abandon_run
+from .outdir import write_marker
+from .run import abandon_run, hold_lock
 
 if TYPE_CHECKING:
     from ..simulate.cycles import CycleResult
@@ -37,7 +37,8 @@ def execute_cycles(plan: RunPlan, *, progress: bool = True) -> tuple[Result, Cyc
 
     cfg, out = plan.cfg, plan.out
     assert cfg.cycles is not None
-    with output_lock(out):
+    hold_lock(plan)
+    with plan.lock:
         try:
             write_marker(out, "running", [], command="run")
             cres = simulate_cycles(cfg.problem, cfg.cycles, plan.solver, progress=progress)

@@ -14,8 +14,9 @@ the top-level names vemwear wrote there). The rules:
 * the place is checked for being writable (a probe file, removed at once) and for free
   space, before any computation;
 * a run holds an exclusive lock on ``OUTDIR/.vemwear.lock`` (``flock``; the system
-  releases it when the process dies, even by SIGKILL): a second run into the same
-  directory is refused at once and leaves nothing behind.
+  releases it when the process dies, even by SIGKILL) from the moment the directory is
+  ready, before any assembly: a second run into the same directory is refused at once
+  (:func:`refuse_locked`, before it reads its configuration) and leaves nothing behind.
 
 Temporaries of atomic writes (:mod:`vemwear.util.atomic`) left by a killed process are
 found by :func:`stale_temporaries`, reported by ``vemwear run`` and removed by
@@ -51,6 +52,7 @@ __all__ = [
     "output_lock",
     "prepare_output_dir",
     "read_marker",
+    "refuse_locked",
     "stale_temporaries",
     "write_marker",
 ]
@@ -152,6 +154,18 @@ def output_lock(outdir: str | os.PathLike[str]) -> Iterator[None]:
         os.close(fd)  # releases the lock
 
 
+def refuse_locked(outdir: str | os.PathLike[str]) -> None:
+    """Raise :class:`OutputDirError` if a run holds the lock of ``outdir`` (a cheap check,
+    made before any work; creates nothing)."""
+    out = Path(outdir).expanduser().absolute()
+    pid = locked_by(out) if out.is_dir() else None
+    if pid is not None:
+        raise OutputDirError(
+            f"another vemwear run (pid {pid or '?'}) is writing into {out}; wait for it to "
+            "end or choose another output directory"
+        )
+
+
 # ---------------------------------------------------------------------------- checks
 def stale_temporaries(outdir: str | os.PathLike[str]) -> list[Path]:
     """vemwear's temporaries left by killed processes: inside ``outdir`` and its
@@ -249,13 +263,8 @@ def check_output_dir(
     """
     out = Path(outdir).expanduser().absolute()
     _check_place(out, protect)
+    refuse_locked(out)
     if out.is_dir():
-        pid = locked_by(out)
-        if pid is not None:
-            raise OutputDirError(
-                f"another vemwear run (pid {pid or '?'}) is writing into {out}; wait for it "
-                "to end or choose another output directory"
-            )
         if any(out.iterdir()):
             if read_marker(out) is None:
                 raise OutputDirError(
@@ -276,7 +285,8 @@ def check_output_dir(
         if free < need_bytes:
             raise OutputDirError(
                 f"not enough free disk for {out}: the output needs about {_size(need_bytes)}, "
-                f"{_size(free)} are free there"
+                f"{_size(free)} are free there; store fewer levels ([output] store_u, every) "
+                "or use --force-size to run anyway"
             )
     return out
 

@@ -15,19 +15,35 @@
   displacements, ``16 n`` bytes each), ``result.npz`` (as much again), and the ParaView
   series (about ``16 n + 160 C`` bytes per stored displacement).
 
-Before the mesh and the time grid are built (:func:`vemwear.config.load_config`'s
-``admit`` hook), the sizes come from the configuration: levels from ``[time]``, cells
-from the generator's options (:meth:`vemwear.mesh.registry.Family.estimate_cells`),
-about ``2 C`` vertices and ``2 sqrt(C)`` contact nodes. So ``steps = 1e9`` is refused
-in a fraction of a second, before anything large is allocated.
+Two checks, one rule: a run is refused (exit 2, with the numbers, unless
+``--force-size``) when its estimate exceeds the machine's available memory or the free
+disk of the output place (on ``--resume``, the free disk plus what ``result.h5``
+already takes there). The numbers of a refusal are those of the estimate from the real
+mesh and time grid (:func:`estimate_config`, :func:`check_estimate`), the estimate that
+``vemwear check`` prints, made after they are built and before any solving.
+
+Before they are built (:func:`vemwear.config.load_config`'s ``admit`` hook,
+:func:`admit_sizes`), a rough check runs on sizes read from the configuration alone, each
+a lower bound of the real one: the levels from ``[time]`` (exact), the cells the
+generator makes (0 for a mesh file, not known before it is read), ``C/2 + 1`` vertices
+for C cells (Euler's formula: no polygonal mesh has fewer), 2 contact nodes, ``ceil(L /
+every)`` kept rows and the stored displacements that ``store_u`` certainly asks for. The
+estimate grows with every size (and the memory this process holds only grows
+meanwhile), so the rough estimate is at most the real-mesh one: it
+refuses only runs that the real-mesh estimate refuses too, and refuses them in a
+fraction of a second, before anything large is allocated (``steps = 1e9``,
+``n_cells = 1e8``).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from ..util.system import available_memory, free_disk, resident_memory
 
@@ -35,7 +51,15 @@ if TYPE_CHECKING:
     from ..config import Config
     from ..config.build import Sizes
 
-__all__ = ["Estimate", "PlanError", "admit_sizes", "base_memory", "estimate", "estimate_config"]
+__all__ = [
+    "Estimate",
+    "PlanError",
+    "admit_sizes",
+    "base_memory",
+    "check_estimate",
+    "estimate",
+    "estimate_config",
+]
 
 _BASE = 160e6
 _LATER = 60e6
@@ -115,20 +139,37 @@ def estimate(
 
 
 def _estimate_sizes(sizes: Sizes) -> Estimate:
-    cells = max(sizes.cells, 1)
-    contact = int(2 * math.sqrt(cells)) + 2
+    """The rough estimate: every size at its lower bound (the module docstring)."""
     return estimate(
         levels=sizes.levels,
-        points=2 * cells + 2 * int(math.sqrt(cells)) + 4,
-        cells=cells,
-        contact=contact,
+        points=sizes.cells // 2 + 1,
+        cells=sizes.cells,
+        contact=2,
         kept=sizes.kept,
         stored_u=sizes.stored_u,
         paraview=sizes.paraview,
     )
 
 
-def _check(est: Estimate, outdir: str | Path | None, where: str) -> None:
+def check_estimate(
+    est: Estimate, outdir: str | Path | None, where: str, *, have: float = 0.0
+) -> None:
+    """Refuse a run whose estimate does not fit (:class:`PlanError`, one line with the
+    numbers and the ``--force-size`` hint).
+
+    Parameters
+    ----------
+    est : Estimate
+        The estimate.
+    outdir : path, optional
+        The output directory (its nearest existing ancestor's free disk counts); None
+        checks the memory only.
+    where : str
+        The prefix of the message (the configuration file).
+    have : float
+        Bytes of the output already on the disk there (``result.h5`` of a resumed run):
+        they are not asked for again.
+    """
     mem = available_memory()
     if mem and est.memory > mem:
         raise PlanError(
@@ -136,23 +177,28 @@ def _check(est: Estimate, outdir: str | Path | None, where: str) -> None:
             "available; use a coarser mesh, fewer levels or a larger [output] every, or "
             "--force-size to run anyway"
         )
-    if outdir is not None:
-        free = free_disk(outdir)
-        if est.disk > free:
-            raise PlanError(
-                f"{where}: the output needs about {_size(est.disk)} of disk, {_size(free)} are "
-                f"free at {outdir}; store fewer levels ([output] store_u, every) or use "
-                "--force-size to run anyway"
-            )
+    if outdir is None:
+        return
+    free, need = free_disk(outdir), est.disk - have
+    if need > free:
+        more = f" more (besides the {_size(have)} it holds)" if have > 0 else ""
+        raise PlanError(
+            f"{where}: the output needs about {_size(need)} of disk{more}, {_size(free)} are "
+            f"free at {outdir}; store fewer levels ([output] store_u, every) or use "
+            "--force-size to run anyway"
+        )
 
 
-def admit_sizes(outdir: str | Path | None = None, *, force_size: bool = False):
-    """An ``admit`` hook for :func:`vemwear.config.load_config`: refuses sizes that would
-    not fit (:class:`PlanError`, one line with the numbers) unless ``force_size``."""
+def admit_sizes(
+    outdir: str | Path | None = None, *, force_size: bool = False, have: float = 0.0
+) -> Callable[[Sizes], None]:
+    """An ``admit`` hook for :func:`vemwear.config.load_config`: the rough check of the
+    module docstring (:class:`PlanError`) unless ``force_size``; ``have`` as in
+    :func:`check_estimate`."""
 
     def admit(sizes: Sizes) -> None:
         if not force_size:
-            _check(_estimate_sizes(sizes), outdir, sizes.source)
+            check_estimate(_estimate_sizes(sizes), outdir, sizes.source, have=have)
 
     return admit
 
@@ -164,7 +210,9 @@ def estimate_config(cfg: Config, *, base: float | None = None) -> Estimate:
     pr = cfg.problem
     L = len(pr.time.t)
     stored = len(out.u_levels)
-    kept = len({*range(0, L, out.every), L - 1, *map(int, out.u_levels)}) if L < 10**7 else L
+    # the multiples of every, and the final and stored levels that are not
+    u = np.union1d(np.asarray(out.u_levels, dtype=np.int64), [L - 1])
+    kept = -(-L // out.every) + int(np.count_nonzero(u % out.every))
     return estimate(
         levels=L,
         points=pr.mesh.n_points,

@@ -2,7 +2,9 @@
 
 ``vemwear run CONFIG -o OUTDIR`` writes into OUTDIR itself (an existing empty directory
 or a mount point included; :mod:`vemwear.runner.outdir` says which directories it may
-use and how ``--force`` treats them), holding a lock on it for the whole run:
+use and how ``--force`` treats them), holding a lock on it from :func:`prepare_run`,
+before any assembly or solving, to the end of the run (:func:`execute_run`) or until
+the run is given up (:func:`abandon_run`):
 
 ``result.h5``
     The finished levels, streamed as they come (:mod:`vemwear.post.stream`); memory
@@ -28,6 +30,7 @@ from __future__ import annotations
 
 import json
 import shlex
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -41,10 +44,10 @@ from .outdir import (
     LOCK_NAME,
     MARKER_NAME,
     OutputDirError,
-    locked_by,
     output_lock,
     prepare_output_dir,
     read_marker,
+    refuse_locked,
     write_marker,
 )
 from .signals import saving, stop_reason
@@ -60,6 +63,7 @@ __all__ = [
     "RunPlan",
     "abandon_run",
     "execute_run",
+    "hold_lock",
     "prepare_run",
     "storage_plan",
 ]
@@ -104,6 +108,12 @@ class RunPlan:
         What every checkpoint stores: fingerprint, its hash, the kept levels, solver.
     command : str
         The command that resumes this run if it stops.
+    created : bool
+        Whether the run made the output directory.
+    lock : ExitStack
+        Holds the lock of the output directory (:func:`hold_lock`) until it is closed.
+    locked : bool
+        Whether ``lock`` holds it.
     """
 
     cfg: Config
@@ -116,6 +126,27 @@ class RunPlan:
     meta: dict[str, Any] = field(default_factory=dict)
     command: str = ""
     created: bool = False
+    lock: ExitStack = field(default_factory=ExitStack)
+    locked: bool = False
+
+
+def hold_lock(plan: RunPlan) -> None:
+    """Take the lock of ``plan.out`` (which must exist) until ``plan.lock`` is closed;
+    nothing if it is held already.
+
+    Raises
+    ------
+    OutputDirError
+        If another run holds it.
+    """
+    if not plan.locked:
+        plan.lock.enter_context(output_lock(plan.out))
+        plan.locked = True
+
+
+def _release_lock(plan: RunPlan) -> None:
+    plan.lock.close()
+    plan.locked = False
 
 
 def _resume_command(config_path: str | Path, out: Path, solver_flag: str | None) -> str:
@@ -144,7 +175,9 @@ def prepare_run(
 
     Without ``resume`` the output directory must be new, empty, or (with ``force``)
     one that vemwear wrote; with ``resume`` it must hold the checkpoint of a stopped
-    run of the same problem keeping the same levels.
+    run of the same problem keeping the same levels. The returned plan holds the lock
+    of the output directory (``plan.lock``): :func:`execute_run` releases it at its
+    end, :func:`abandon_run` when the run is given up before.
 
     Raises
     ------
@@ -172,14 +205,10 @@ def prepare_run(
         meta=meta,
         command=_resume_command(config_path, outdir, solver_flag),
     )
-    pid = locked_by(outdir) if outdir.is_dir() else None
-    if pid is not None:
-        raise OutputDirError(
-            f"another vemwear run (pid {pid or '?'}) is writing into {outdir}; wait for it to "
-            "end or choose another output directory"
-        )
-    if resume:
+    refuse_locked(outdir)
+    if resume:  # a refused resume leaves the directory as it was, lock file included
         plan.state, plan.previous_solver = _load_checkpoint(outdir, meta)
+        hold_lock(plan)
         return plan
     marker = read_marker(outdir) if outdir.is_dir() else None
     if marker is not None and marker.get("state") in ("partial", "running") and not force:
@@ -191,6 +220,7 @@ def prepare_run(
     prepare_output_dir(
         outdir, force=force, protect=[config_path], need_bytes=need_bytes, command="run"
     )
+    hold_lock(plan)  # before any assembly: a second run is refused at once
     return plan
 
 
@@ -220,11 +250,14 @@ def _load_checkpoint(outdir: Path, meta: dict[str, Any]) -> tuple[LoopState, dic
 
 
 def _reason(exc: BaseException) -> str:
+    from ..simulate.levels import WearOverflowError
     from ..solvers import ConvergenceError
 
     by_signal = stop_reason(exc)
     if by_signal is not None:
         return by_signal
+    if isinstance(exc, WearOverflowError):
+        return str(exc)
     if isinstance(exc, ConvergenceError):
         return f"the solver did not converge: {exc}"
     return f"error: {type(exc).__name__}: {exc}"
@@ -245,7 +278,8 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
     from ..simulate.levels import run_levels
 
     out, cfg = plan.out, plan.cfg
-    with output_lock(out):
+    hold_lock(plan)
+    with plan.lock:
         write_marker(out, "running", [STREAM_NAME, CHECKPOINT_NAME], command="run")
         meta = {**plan.meta, "written": ""}
 
@@ -321,9 +355,12 @@ def _stop(plan: RunPlan, sink: Any, exc: BaseException) -> None:
 
 def abandon_run(plan: RunPlan) -> None:
     """A prepared run that failed before its first level: remove what it wrote in its
-    output directory, and the directory if it made it (nothing else)."""
-    if plan.state is None:
-        _discard(plan)
+    output directory, and the directory if it made it (nothing else); release its lock."""
+    try:
+        if plan.state is None:
+            _discard(plan)
+    finally:
+        _release_lock(plan)
 
 
 def _discard(plan: RunPlan) -> None:

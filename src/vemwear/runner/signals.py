@@ -3,9 +3,11 @@
 :func:`signals_as_interrupts` turns SIGTERM (a ``kill``, a batch system's time limit)
 and SIGHUP (a closed terminal) into :class:`Terminated`, a ``KeyboardInterrupt``, so
 that a run stops through the same path as after Ctrl-C and keeps its finished levels.
-:func:`saving` marks the section that writes them: a signal arriving then does not
-abandon the save; it is remembered (and a line says so), and only the second one
-arriving during the save abandons it.
+The first signal prints a line (``vemwear: interrupted (Ctrl-C); stopping``) and stops
+the run (at once, or at the end of a checkpoint being written: :func:`saving` marks
+such sections). A second signal does not abandon the save of the finished levels that
+follows: a line says so (``... please wait (once more to abandon the save)``); only a
+third one abandons it.
 """
 
 from __future__ import annotations
@@ -31,8 +33,9 @@ class Terminated(KeyboardInterrupt):
 
 class _State:
     depth = 0  # nesting of saving()
-    pending: BaseException | None = None  # the first signal received while saving
-    count = 0  # signals received while saving
+    pending: BaseException | None = None  # the stop signal received while saving
+    stopping = False  # a signal has stopped the run: its levels are being saved
+    count = 0  # signals received since
 
 
 def stop_reason(exc: BaseException) -> str | None:
@@ -44,21 +47,27 @@ def stop_reason(exc: BaseException) -> str | None:
     return None
 
 
+def _say(line: str) -> None:
+    try:  # after SIGHUP the terminal may be gone
+        print(line, file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
+
+
 def _handler(signum: int, frame: Any) -> None:
     name = signal.Signals(signum).name
     exc: BaseException = KeyboardInterrupt() if name == "SIGINT" else Terminated(name)
-    if _State.depth == 0:
-        raise exc
+    if not _State.stopping:  # the first signal stops the run (after a checkpoint being saved)
+        _State.stopping = True
+        _say(f"vemwear: {stop_reason(exc)}; stopping")
+        if _State.depth == 0:
+            raise exc
+        _State.pending = exc
+        return
     _State.count += 1
     if _State.count >= 2:  # the second signal during the save abandons it
         raise exc
-    if _State.pending is None:
-        _State.pending = exc
-    print(
-        "vemwear: saving the finished levels; please wait (once more to abandon the save)",
-        file=sys.stderr,
-        flush=True,
-    )
+    _say("vemwear: saving the finished levels; please wait (once more to abandon the save)")
 
 
 @contextmanager
@@ -77,6 +86,7 @@ def signals_as_interrupts() -> Iterator[None]:
     finally:
         for sig, h in old.items():
             signal.signal(sig, h)
+        _State.stopping, _State.count, _State.pending = False, 0, None
 
 
 @contextmanager
@@ -95,6 +105,6 @@ def saving(reraise: bool = True) -> Iterator[None]:
     finally:
         _State.depth -= 1
         if _State.depth == 0:
-            pending, _State.pending, _State.count = _State.pending, None, 0
-            if pending is not None and reraise:
+            pending, _State.pending = _State.pending, None
+            if pending is not None and reraise:  # the run stops now
                 raise pending

@@ -12,6 +12,10 @@ enter the discrete problem by lifting: ``K_ff u_f = F_f - K_fc u_c(t)``
 :meth:`Constraints.free_rigid_motions` finds the rigid motions the constraints leave
 free, so that a problem without a clamped part is accepted exactly when its stiffness
 on the free dofs is regular.
+
+The dofs of a part come from the virtual element space (:mod:`vemwear.vem.space`): for
+k = 1 the two dofs of every vertex of the part; for k = 2 also the edge means of its
+edges, whose prescribed values are the means of the prescribed component over the edge.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polymesh import Mesh
+from ..vem.space import P1Space, Space
 
 __all__ = ["Component", "Constraints", "Prescribed"]
 
@@ -68,27 +73,32 @@ class Constraints:
         Parts with u = 0 (those the mesh does not have are skipped).
     prescribed : sequence of Prescribed
         Parts with prescribed components.
+    space : Space, optional
+        The virtual element space whose dofs are constrained (k = 1 by default).
     """
 
     def __init__(
-        self, mesh: Mesh, clamped: Sequence[str], prescribed: Sequence[Prescribed]
+        self,
+        mesh: Mesh,
+        clamped: Sequence[str],
+        prescribed: Sequence[Prescribed],
+        space: Space | None = None,
     ) -> None:
-        n = 2 * mesh.n_points
+        self.space: Space = P1Space(mesh) if space is None else space
+        sp_ = self.space
+        n = sp_.n_dofs
         clamped = tuple(c for c in clamped if mesh.has_part(c))
         #: the constraining parts: the clamped ones, then the prescribed ones
         self.parts = (*clamped, *(p.part for p in prescribed))
         self.n_clamped = len(clamped)
         owner = -np.ones(n, dtype=np.int64)  # -1 free, else the index in self.parts
         for i, name in enumerate(clamped):
-            v = mesh.part_vertices(name)
-            for c in (0, 1):
-                d = 2 * v + c
+            for d in sp_.component_dofs(mesh.part_edges(name)):
                 owner[d[owner[d] < 0]] = i
         for i, pr in enumerate(prescribed):
-            v = mesh.part_vertices(pr.part)
-            for c, spec in enumerate((pr.ux, pr.uy)):
+            comp = sp_.component_dofs(mesh.part_edges(pr.part))
+            for d, spec in zip(comp, (pr.ux, pr.uy), strict=True):
                 if spec is not None:
-                    d = 2 * v + c
                     owner[d[owner[d] < 0]] = self.n_clamped + i
         self.mesh = mesh
         self.prescribed = tuple(prescribed)
@@ -106,22 +116,20 @@ class Constraints:
     @property
     def fully_fixed_vertices(self) -> NDArray[np.bool_]:
         """Vertices with both components constrained (they are no contact nodes)."""
-        return np.asarray(self.mask.reshape(-1, 2).all(axis=1))
+        return np.asarray(self.mask[: 2 * self.mesh.n_points].reshape(-1, 2).all(axis=1))
 
     def values(self, t: float) -> NDArray[np.float64]:
         """The prescribed values at the constrained dofs (``self.dofs``) at time ``t``."""
         out = np.zeros(len(self.dofs))
         if self.zero:
             return out
-        P = self.mesh.points
         for i, pr in enumerate(self.prescribed):
             for c, spec in enumerate((pr.ux, pr.uy)):
                 sel = (self.owner == self.n_clamped + i) & (self.dofs % 2 == c)
                 if spec is None or not np.any(sel):
                     continue
                 if callable(spec):
-                    x = P[self.dofs[sel] // 2]
-                    val = np.broadcast_to(np.asarray(spec(x, t), dtype=float), (len(x),))
+                    val = self.space.component_values(self.dofs[sel], spec, t)
                     if not np.all(np.isfinite(val)):
                         name = "ux" if c == 0 else "uy"
                         raise ValueError(
@@ -138,11 +146,13 @@ class Constraints:
         P = self.mesh.points
         centre = P.mean(axis=0)
         L = float(np.ptp(P, axis=0).max()) or 1.0
-        v, c = self.dofs // 2, self.dofs % 2
+        # a rigid motion is linear: its dof (a vertex value or a mean over an edge or a
+        # cell) is its value at the dof's point
+        X, c = self.space.dof_points[self.dofs], self.dofs % 2
         A = np.zeros((len(self.dofs), 3))
         A[c == 0, 0] = 1.0
         A[c == 1, 1] = 1.0
-        A[:, 2] = np.where(c == 0, -(P[v, 1] - centre[1]), P[v, 0] - centre[0]) / L
+        A[:, 2] = np.where(c == 0, -(X[:, 1] - centre[1]), X[:, 0] - centre[0]) / L
         if len(A) == 0:
             return ["translations in x and y and the rotation"]
         _, sv, Vt = np.linalg.svd(A, full_matrices=True)

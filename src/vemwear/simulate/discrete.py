@@ -4,7 +4,8 @@
 displacements, the contact operators of all contact parts, and gives at each level the
 data of the step problem (3.21): the load, the friction direction and the wear rate
 from the tangential foundation velocity, and the shift of the contact unknowns by the
-initial gap (docs/method.md, sections 3b and 4).
+initial gap (docs/method.md, sections 3b and 4). The element level comes in through the
+problem's space (:mod:`vemwear.vem.space`), so nothing here depends on the order k.
 """
 
 from __future__ import annotations
@@ -19,7 +20,6 @@ from numpy.typing import NDArray
 
 from ..contact import ContactBoundary, tangential_velocity
 from ..solvers.system import ContactSystem, StepData, StepSolution
-from ..vem import stiffness
 
 if TYPE_CHECKING:
     from .problem import Problem
@@ -67,8 +67,9 @@ class Discretization:
         self.gap = problem.nodal["gap"]
         self.constraints = con = problem.constraints
         self.free = con.free
+        self.space = space = problem.space
         with np.errstate(all="ignore"):
-            self.K_full = stiffness(mesh, problem.material, problem.stabilization)
+            self.K_full = space.stiffness(problem.material, problem.stabilization)
         if not np.all(np.isfinite(self.K_full.data)):
             mat = problem.material
             raise DataError(
@@ -78,10 +79,18 @@ class Discretization:
         K = self.K_full[self.free][:, self.free].tocsr()
         # the lifting of prescribed values, K_fc u_c(t) (none if all are zero)
         self.K_fc = None if con.zero else self.K_full[self.free][:, con.dofs].tocsr()
-        index = -np.ones(self.n_dof, dtype=np.int64)
-        index[self.free] = np.arange(len(self.free))
-        cdofs = index[np.column_stack([2 * cb.nodes, 2 * cb.nodes + 1])]
-        self.offset = self._contact_offset(cdofs)
+        trace = None
+        if cb.trace is None:  # k = 1: the two dofs of each contact vertex
+            index = -np.ones(self.n_dof, dtype=np.int64)
+            index[self.free] = np.arange(len(self.free))
+            cdofs = index[np.column_stack([2 * cb.nodes, 2 * cb.nodes + 1])]
+            self.offset = self._contact_offset(cdofs)
+            dof_points = mesh.points[self.free // 2]
+        else:  # the trace operator on the free dofs; prescribed dofs give the offset
+            cdofs = None
+            trace = sp.csr_matrix(cb.trace[:, self.free])
+            self.offset = self._contact_offset_trace()
+            dof_points = space.dof_points[self.free]
         shift = self.gap - self.offset
         self.shift = shift if np.any(shift != 0.0) else None
         self.system = ContactSystem(
@@ -92,7 +101,8 @@ class Discretization:
             weights=cb.weights,
             g=self.g if self.shift is None else self.g + self.shift,
             p=problem.law,
-            dof_points=mesh.points[self.free // 2],
+            dof_points=dof_points,
+            trace=trace,
         )
         self._constant_load = not (
             callable(problem.f1)
@@ -136,6 +146,26 @@ class Discretization:
                     )
         return off
 
+    def _contact_offset_trace(self) -> NDArray[np.float64]:
+        """As :meth:`_contact_offset`, with the trace operator: ``N_c u_c``."""
+        con, cb = self.constraints, self.contact
+        if con.zero:
+            return np.zeros(cb.m)
+        Nc = cb.N[:, con.dofs].tocsr()
+        if Nc.nnz == 0:
+            return np.zeros(cb.m)
+        t = self.problem.time.t
+        off = np.asarray(Nc @ con.values(float(t[0])), dtype=np.float64)
+        if con.time_dependent:
+            for time in np.linspace(float(t[0]), float(t[-1]), 17)[1:]:
+                if not np.allclose(Nc @ con.values(float(time)), off, rtol=0, atol=1e-14):
+                    raise ValueError(
+                        "a prescribed displacement that changes in time moves contact nodes "
+                        "along their normal; the normal displacement of a contact node is an "
+                        "unknown of the contact problem: prescribe it on other parts"
+                    )
+        return off
+
     def step_solver(self, opts: Any) -> Any:
         """The step solver of ``opts`` on this system, built once (one factorization of
         K however many runs use it, e.g. the cycles of a cycle jump)."""
@@ -145,7 +175,7 @@ class Discretization:
 
     @property
     def n_dof(self) -> int:
-        return 2 * self.problem.mesh.n_points
+        return int(self.space.n_dofs)
 
     def load(self, t: float) -> NDArray[np.float64]:
         """``f_h(t) - K_fc u_c(t)`` on the free dofs (body force by 3.3, tractions by
@@ -282,18 +312,23 @@ class Discretization:
             changes["forces"] = self.resultants(step, solution, solver)
         return dataclasses.replace(solution, **changes) if changes else solution
 
-    def full_displacement(
-        self, u_free: NDArray[np.float64], t: float | None = None
-    ) -> NDArray[np.float64]:
-        """(n_points, 2) displacement: ``u_free`` on the free dofs, the prescribed values
-        at time ``t`` on the others (zero on clamped parts)."""
+    def full_dofs(self, u_free: NDArray[np.float64], t: float | None = None) -> NDArray:
+        """All dofs of the displacement: ``u_free`` on the free dofs, the prescribed
+        values at time ``t`` on the others (zero on clamped parts)."""
         u = np.zeros(self.n_dof)
         u[self.free] = u_free
         if not self.constraints.zero:
             if t is None:
                 raise ValueError("full_displacement: the time is needed for prescribed values")
             u[self.constraints.dofs] = self.constraints.values(t)
-        return u.reshape(-1, 2)
+        return u
+
+    def full_displacement(
+        self, u_free: NDArray[np.float64], t: float | None = None
+    ) -> NDArray[np.float64]:
+        """(n_points, 2) displacement at the vertices (the vertex dofs of
+        :meth:`full_dofs`; all dofs for k = 1)."""
+        return self.space.vertex_values(self.full_dofs(u_free, t))
 
     def smallness_estimate(self) -> dict[str, float]:
         """Estimate of the smallness condition of Theorem 3.4, ``c_0^2 L_p ||mu|| < C_1``.

@@ -16,17 +16,18 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
 from ..solvers import StepSolution
-from ..solvers.system import StepData, check_converged, kkt_residuals_block
+from ..solvers.system import ConvergenceError, StepData, check_converged, kkt_residuals_block
 from .stream import LevelSink, LoopState, Pending, StoragePlan
 
 if TYPE_CHECKING:
     from .options import SolverOptions
     from .problem import Problem
 
-__all__ = ["RESIDUAL_NAMES", "run_levels"]
+__all__ = ["RESIDUAL_NAMES", "WearOverflowError", "run_levels"]
 
 #: The KKT residuals of every step, in the order of the result arrays.
 RESIDUAL_NAMES = ("equilibrium", "feasibility", "complementarity")
@@ -81,6 +82,8 @@ def run_levels(
     ------
     ConvergenceError
         If a step does not reach the tolerance (the message names the level).
+    WearOverflowError
+        If the wear update gives non-finite values (a ConvergenceError naming the level).
     BaseException
         Any error or interruption carries the state of the finished levels as
         ``exc.loop_state`` before it propagates.
@@ -159,7 +162,10 @@ def run_levels(
                 callback(n, sol)
             w_next = w
             if n + 1 < L:  # wear update (3.22), left rectangle rule
-                w_next = w + (tgrid[n + 1] - tgrid[n]) * d.alpha(step.t) * sol.p_soft
+                with np.errstate(all="ignore"):
+                    w_next = w + (tgrid[n + 1] - tgrid[n]) * d.alpha(step.t) * sol.p_soft
+                if not np.all(np.isfinite(w_next)):
+                    raise _wear_overflow(problem, n, w_next)
             now = (n + 1, w_next, sol)
             # blocks at fixed positions among the stored levels: a resumed run recovers
             # the same blocks, so its results are bitwise the same
@@ -176,3 +182,19 @@ def run_levels(
     timings["time_loop"] = time.perf_counter() - t2
     timings["total"] = time.perf_counter() - t0
     return LoopState(now[0], now[1], now[2], [])
+
+
+class WearOverflowError(ConvergenceError):
+    """The wear update gave non-finite values (kappa |v*| p(u_nu - w) overflows)."""
+
+
+def _wear_overflow(problem: Problem, n: int, w: NDArray[np.float64]) -> WearOverflowError:
+    """The error of a wear ``w^{n+1}`` that is not finite, naming the level and a node."""
+    t = problem.time.t
+    a = int(np.flatnonzero(~np.isfinite(w))[0])
+    x = ", ".join(f"{c:.4g}" for c in problem.contact.points[a])
+    return WearOverflowError(
+        f"the wear is not finite at time level {n + 1} (t = {t[n + 1]:g}): {w[a]:g} at "
+        f"contact node {a} (x = ({x})) after the update of level {n}; the data overflow "
+        "(check the scale of [contact] kappa, v_star and the compliance law)"
+    )

@@ -338,7 +338,8 @@ def _restart(out: Result, prev: Result, problem: Problem) -> LoopState:
         + (out.t[c] - out.t[c - 1]) * d.alpha(float(out.t[c - 1])) * out.p_soft[c - 1]
     )
     u_last = None
-    if slot[c - 1] >= 0:
+    if slot[c - 1] >= 0 and out.u[slot[c - 1]].size == d.n_dof:
+        # the stored vertex values are all the dofs for k = 1 only (k = 2: no guess of u)
         u_last = out.u[slot[c - 1]].ravel()[d.free]
     guess = StepSolution(
         u=u_last,

@@ -32,8 +32,9 @@ from ..contact import (
 from ..mesh.checks import check_mesh
 from ..mesh.polymesh import Mesh, MeshError
 from ..util.hashing import sha256_arrays
-from ..vem import Material, body_force_vector, edge_load_vector
+from ..vem import Material
 from ..vem.assembly import Field
+from ..vem.space import ORDERS, P1Space, P2Space, make_space
 from .constraints import Constraints, Prescribed
 from .discrete import DataError
 from .timegrid import TimeGrid
@@ -79,6 +80,9 @@ class Problem:
     contacts : tuple of ContactPart
         Several contact parts with their own data; by default one part ``contact``
         with ``p, g, mu, kappa, v_star, gap`` above.
+    order : int
+        The order k of the virtual element space (:mod:`vemwear.vem.space`): 1 (the
+        paper's examples) or 2 (docs/method.md, section 9).
 
     ``f2`` may also be a mapping ``{part: traction}`` for several traction parts.
     Every boundary edge belongs to one part; parts that are none of the above are
@@ -100,8 +104,11 @@ class Problem:
     clamped: tuple[str, ...] = ("clamped",)
     displacement: tuple[Prescribed, ...] = ()
     contacts: tuple[ContactPart, ...] = ()
+    order: int = 1
 
     def __post_init__(self) -> None:
+        if self.order not in ORDERS:
+            raise ValueError(f"order must be one of {ORDERS}, got {self.order!r}")
         if not isinstance(self.v_star, FoundationVelocity):
             object.__setattr__(self, "v_star", FoundationVelocity(self.v_star))
         object.__setattr__(self, "clamped", tuple(self.clamped))
@@ -152,17 +159,25 @@ class Problem:
         return NodalLaw(tuple(pc.p for pc in self.parts), self.contact.part)
 
     @cached_property
+    def space(self) -> P1Space | P2Space:
+        """The virtual element space of order :attr:`order` on the mesh."""
+        return make_space(self.mesh, self.order)
+
+    @cached_property
     def constraints(self) -> Constraints:
         """The constrained dofs: clamped parts and prescribed components."""
-        return Constraints(self.mesh, self.clamped, self.displacement)
+        return Constraints(self.mesh, self.clamped, self.displacement, self.space)
 
     @cached_property
     def contact(self) -> ContactBoundary:
         """Nodes, weights and normals of Gamma_C (all contact parts)."""
+        con = self.constraints
         return contact_boundary(
             self.mesh,
             tuple(pc.part for pc in self.parts),
-            self.constraints.fully_fixed_vertices,
+            con.fully_fixed_vertices,
+            space=self.space,
+            constrained=con.mask,
         )
 
     @cached_property
@@ -205,7 +220,10 @@ class Problem:
             return np.asarray(x).tolist()
 
         m = self.mesh
+        # the order only when it is not the paper's k = 1 (earlier fingerprints stay valid)
+        order = {} if self.order == 1 else {"order": self.order}
         return {
+            **order,
             "mesh": {
                 "points": m.n_points,
                 "cells": m.n_cells,
@@ -240,9 +258,9 @@ class Problem:
     def external_load(self, t: float) -> NDArray[np.float64]:
         """``<f_h(t), v>`` on all dofs: the body force by (3.3) and the traction of every
         traction part by edge quadrature."""
-        F = body_force_vector(self.mesh, self.f1, t)
+        F = self.space.body_force(self.f1, t)
         for name, f2 in self.tractions.items():
-            F = F + edge_load_vector(self.mesh, self.mesh.part_edges(name), f2, t)
+            F = F + self.space.boundary_load(self.mesh.part_edges(name), f2, t)
         return F
 
     def fingerprint(self) -> dict[str, Any]:

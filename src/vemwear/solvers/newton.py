@@ -115,18 +115,29 @@ class CondensedNewton:
         self.system = system
         self.options = options or NewtonOptions()
         m = system.m
-        cd = system.contact_dofs.ravel()
-        free = cd >= 0  # prescribed components of contact nodes are not unknowns
-        self.factor = schur_factorize(system.K, cd[free], system.dof_points, self.options.backend)
-        if np.all(free):
-            C = self.factor.S_inv.reshape(m, 2, m, 2)  # block of K^{-1} on the contact dofs
+        if system.contact_dofs is None:  # a trace operator (k = 2): C_NN = N_c C N_c^T
+            cols = np.unique(np.concatenate([system.N.indices, system.Tau.indices]))
+            self.factor = schur_factorize(system.K, cols, system.dof_points, self.options.backend)
+            Nc = system.N[:, cols].toarray()
+            CN = self.factor.S_inv @ Nc.T
+            self.C_NN = Nc @ CN
+            self.C_NT = system.Tau[:, cols].toarray() @ CN
+            self.C_NT = np.ascontiguousarray(self.C_NT.T)  # N C Tau^T
         else:
-            full = np.zeros((2 * m, 2 * m))
-            full[np.ix_(free, free)] = self.factor.S_inv
-            C = full.reshape(m, 2, m, 2)
-        nu, tau = system.normals, system.tangents
-        self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
-        self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
+            cd = system.contact_dofs.ravel()
+            free = cd >= 0  # prescribed components of contact nodes are not unknowns
+            self.factor = schur_factorize(
+                system.K, cd[free], system.dof_points, self.options.backend
+            )
+            if np.all(free):
+                C = self.factor.S_inv.reshape(m, 2, m, 2)  # block of K^{-1} on contact dofs
+            else:
+                full = np.zeros((2 * m, 2 * m))
+                full[np.ix_(free, free)] = self.factor.S_inv
+                C = full.reshape(m, 2, m, 2)
+            nu, tau = system.normals, system.tangents
+            self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
+            self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
         w = system.weights
         self.A_norm = self.C_NN * w[None, :]
         self._T = self.C_NT * w[None, :]

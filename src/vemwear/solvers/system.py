@@ -43,28 +43,36 @@ class ContactSystem:
     ----------
     K : (nf, nf) sparse stiffness on the free dofs
     contact_dofs : (m, 2) free-dof ids of the x and y components at each contact node
-        (-1 for a prescribed component)
+        (-1 for a prescribed component); None when ``trace`` is given
     normals, tangents : (m, 2) unit nu_a and tau_a
     weights : (m,) nodal weights
     g : (m,) thickness of the soft layer (bound on ``N u``)
     p : the compliance law
     dof_points : (nf, 2) coordinates of the vertex of each free dof (for the ordering
         of the factorization)
+    trace : (2 m, nf) sparse, optional
+        Rows ``2 a + c``: component c of the displacement at node a from the free dofs,
+        for spaces whose contact nodes are not dofs (k = 2: edge midpoints); then
+        ``N = diag(nu_x) T_x + diag(nu_y) T_y`` and the same for ``Tau``.
     """
 
     K: sp.csr_matrix
-    contact_dofs: NDArray[np.int64]
+    contact_dofs: NDArray[np.int64] | None
     normals: NDArray[np.float64]
     tangents: NDArray[np.float64]
     weights: NDArray[np.float64]
     g: NDArray[np.float64]
     p: ComplianceLaw
     dof_points: NDArray[np.float64]
+    trace: sp.csr_matrix | None = None
     N: sp.csr_matrix = field(init=False, repr=False)
     Tau: sp.csr_matrix = field(init=False, repr=False)
     c_ncp: NDArray[np.float64] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
+        if self.contact_dofs is None:
+            self._init_from_trace()
+            return
         m, nf = len(self.weights), self.K.shape[0]
         rows = np.repeat(np.arange(m), 2)
         cols = np.asarray(self.contact_dofs).ravel()
@@ -79,6 +87,20 @@ class ContactSystem:
         dK = np.where(self.contact_dofs >= 0, diagK[np.maximum(self.contact_dofs, 0)], 0.0)
         kn = np.sum(dK * np.asarray(self.normals) ** 2, axis=1)
         object.__setattr__(self, "c_ncp", kn / self.weights)
+
+    def _init_from_trace(self) -> None:
+        """N, Tau and the complementarity scale from the trace operator."""
+        if self.trace is None:
+            raise ValueError("ContactSystem: give contact_dofs or trace")
+        T = sp.csr_matrix(self.trace)
+        for name, d in (("N", self.normals), ("Tau", self.tangents)):
+            op = sp.diags(np.asarray(d)[:, 0]) @ T[0::2] + sp.diags(np.asarray(d)[:, 1]) @ T[1::2]
+            op = sp.csr_matrix(op)
+            op.eliminate_zeros()
+            object.__setattr__(self, name, op)
+        # as for nodal dofs: sum_j N_aj^2 K_jj, the normal stiffness at the node
+        kn = self.N.multiply(self.N) @ self.K.diagonal()
+        object.__setattr__(self, "c_ncp", np.asarray(kn) / self.weights)
 
     @property
     def m(self) -> int:
