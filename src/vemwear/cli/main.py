@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
-from . import mesh_cmd, outdir_cmd
+from . import mesh_cmd, outdir_cmd, study_cmd
 from .common import (
     EXIT_CONVERGENCE,
     EXIT_INPUT,
@@ -268,6 +268,8 @@ COMMANDS: dict[str, tuple[str, str | None, Setup]] = {
     "mesh": (mesh_cmd.SUMMARY, None, mesh_cmd.setup),
     "clean": (outdir_cmd.CLEAN_SUMMARY, None, outdir_cmd.setup_clean),
     "export": (outdir_cmd.EXPORT_SUMMARY, None, outdir_cmd.setup_export),
+    "sweep": (study_cmd.SWEEP_SUMMARY, None, study_cmd.setup_sweep),
+    "fit": (study_cmd.FIT_SUMMARY, None, study_cmd.setup_fit),
 }
 
 

@@ -1,0 +1,242 @@
+"""The result of a study: one xarray Dataset, written as ``OUTDIR/study.nc``.
+
+Dimensions: for a ``grid`` design each axis is a dimension named by its key path
+(``contact.kappa``) with the axis values as its coordinate; for ``zip``, ``lhs`` and
+``sobol`` designs the runs are a dimension ``run`` and each axis is a coordinate along
+it. Axis values that are arrays (``mesh.divisions = [16, 8]``) become strings
+(``"[16, 8]"``).
+
+Variables per run (NaN for a failed run):
+
+``max_wear``        max of the wear w at the final time T [length]
+``worn_volume``     ``sum(omega_a * w_a)`` at T, the worn area (volume per unit depth)
+``max_pressure``    max of the soft-layer pressure p over every level and node [stress]
+``max_rigid_pressure``  max of the rigid-layer pressure (``lam`` of ``result.npz``)
+``iterations``      solver iterations summed over the steps
+``wall_time``       seconds the run took on its worker (NaN for runs of an earlier
+                    execution whose record is lost)
+``status``          ``done`` or ``failed``; ``error`` the failure's message
+``run_id``          the run's directory under ``OUTDIR/runs``
+
+Profiles along Gamma_C over time, ``(..., time, s)``: ``wear``, ``u_nu``, ``p``; force
+resultants ``forces`` ``(..., time, part, component)``. When the runs have different
+meshes they are interpolated (linearly) onto a common arc-length grid (as many points
+as the finest run, from the smallest to the largest arc length); when their time
+levels differ, onto the union of their levels (NaN beyond a run's final time). Where
+the contact nodes do not have increasing arc lengths (several contact parts) the
+profile dimension is ``node``, with ``s`` as a coordinate along it, and runs with
+other meshes leave the profiles out (the attribute ``profiles`` says why).
+
+Attributes: the study file's and base configuration's text, the vemwear version,
+the design and the counts of this execution.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .design import Study
+from .execute import RUNS_DIR, Execution
+
+__all__ = ["SCALARS", "STUDY_NC", "build_dataset", "write_dataset"]
+
+STUDY_NC = "study.nc"
+#: The scalar summaries per run.
+SCALARS = (
+    "max_wear",
+    "worn_volume",
+    "max_pressure",
+    "max_rigid_pressure",
+    "iterations",
+    "wall_time",
+)
+_UNITS = {
+    "max_wear": "max of w at T",
+    "worn_volume": "sum of omega_a w_a at T (area: volume per unit depth)",
+    "max_pressure": "max of the soft-layer pressure p over t and s",
+    "max_rigid_pressure": "max of the rigid-layer pressure (lam) over t and s",
+    "iterations": "solver iterations summed over the steps",
+    "wall_time": "seconds of the run on its worker",
+}
+
+
+def _coord(values: list[Any]) -> NDArray[Any]:
+    if all(isinstance(v, bool | int | float) for v in values):
+        return np.asarray(values)
+    return np.asarray([v if isinstance(v, str) else json.dumps(v) for v in values], dtype=str)
+
+
+def _load(out: Path, rid: str) -> dict[str, NDArray[Any]] | None:
+    from ..post.results import load_result
+
+    try:
+        return load_result(out / RUNS_DIR / rid)
+    except (OSError, ValueError):
+        return None
+
+
+def _union(ts: list[NDArray[np.float64]]) -> NDArray[np.float64]:
+    """The sorted union of time grids, values closer than 1e-12 T merged."""
+    allt = np.sort(np.concatenate(ts))
+    tol = 1e-12 * max(float(np.abs(allt).max(initial=0.0)), 1.0)
+    keep = np.concatenate([[True], np.diff(allt) > tol])
+    return np.asarray(allt[keep], dtype=np.float64)
+
+
+def _interp(x_new: NDArray[Any], x: NDArray[Any], a: NDArray[Any], axis: int) -> NDArray[Any]:
+    """Linear interpolation of ``a`` along ``axis`` (NaN outside ``x``); exact copy when
+    the grids agree."""
+    if x.shape == x_new.shape and np.allclose(x, x_new, rtol=0, atol=1e-12):
+        return np.asarray(a, dtype=np.float64)
+    if x.size == 1:
+        shape = list(a.shape)
+        shape[axis] = x_new.size
+        out = np.full(shape, np.nan)
+        hit = np.isclose(x_new, x[0])
+        idx: list[Any] = [slice(None)] * a.ndim
+        idx[axis] = hit
+        out[tuple(idx)] = np.take(a, [0], axis=axis)
+        return out
+    from scipy.interpolate import interp1d
+
+    f = interp1d(x, a, axis=axis, bounds_error=False, fill_value=np.nan, assume_sorted=True)
+    return np.asarray(f(x_new), dtype=np.float64)
+
+
+def _arc_grid(results: Mapping[str, Mapping[str, NDArray[Any]]]) -> tuple[Any, str, str]:
+    """The common arc-length grid, its dimension name and a note (empty if fine)."""
+    ss = [np.asarray(r["contact_s"], dtype=np.float64) for r in results.values()]
+    first = ss[0]
+    same = all(s.shape == first.shape and np.allclose(s, first, atol=1e-12) for s in ss)
+    increasing = all(s.size >= 2 and np.all(np.diff(s) > 0) for s in ss)
+    if same:
+        return first, ("s" if increasing else "node"), ""
+    if not increasing:
+        return None, "s", "left out: runs with other meshes and several contact parts"
+    lo, hi = min(float(s[0]) for s in ss), max(float(s[-1]) for s in ss)
+    return np.linspace(lo, hi, max(s.size for s in ss)), "s", "interpolated onto a common grid"
+
+
+def build_dataset(study: Study, execution: Execution, out: str | Path) -> Any:
+    """The study's Dataset from the runs' outputs in ``out`` and their records.
+
+    Returns
+    -------
+    xarray.Dataset
+    """
+    import xarray as xr
+
+    from .. import __version__
+
+    out = Path(out)
+    grid = study.kind == "grid"
+    dims: tuple[str, ...] = tuple(study.keys) if grid else ("run",)
+    shape = study.shape
+    coords: dict[str, Any] = {}
+    if grid:
+        coords = {k: (k, _coord(v)) for k, v in study.axes.items()}
+    else:
+        coords = {"run": ("run", np.arange(len(study.runs)))}
+        for k in study.keys:
+            coords[k] = ("run", _coord([r.params[k] for r in study.runs]))
+
+    def where(index: int) -> tuple[int, ...]:
+        return tuple(int(i) for i in np.unravel_index(index, shape))
+
+    scal = {name: np.full(shape, np.nan) for name in SCALARS}
+    text = {n: np.full(shape, "", dtype=object) for n in ("status", "error", "run_id")}
+    results: dict[str, dict[str, NDArray[Any]]] = {}
+    for r in study.runs:
+        at = where(r.index)
+        rec = execution.records.get(r.id, {})
+        res = _load(out, r.id) if rec.get("status") == "done" else None
+        status = "done" if res is not None else "failed"
+        text["status"][at], text["run_id"][at] = status, r.id
+        text["error"][at] = rec.get("error") or ("" if res is not None else "no result")
+        scal["wall_time"][at] = float(rec.get("wall_time", np.nan))
+        if res is None:
+            continue
+        results[r.id] = res
+        wT = np.asarray(res["wear"][-1], dtype=np.float64)
+        scal["max_wear"][at] = float(wT.max(initial=0.0))
+        scal["worn_volume"][at] = float(np.dot(res["contact_weights"], wT))
+        scal["max_pressure"][at] = float(np.max(res["p"], initial=0.0))
+        scal["max_rigid_pressure"][at] = float(np.max(res["lam"], initial=0.0))
+        scal["iterations"][at] = float(np.sum(res["iterations"]))
+    data: dict[str, Any] = {n: (dims, v, {"long_name": _UNITS[n]}) for n, v in scal.items()}
+    data.update({n: (dims, v.astype(str)) for n, v in text.items()})
+    attrs: dict[str, Any] = {
+        "title": study.title,
+        "design": study.kind,
+        "axes": json.dumps(study.keys),
+        "study_file": str(study.path.resolve()) if study.path is not None else "",
+        "study": study.text,
+        "base_config_file": str(study.base_path.resolve()),
+        "base_config": study.base_text,
+        "vemwear_version": __version__,
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+        "runs": len(study.runs),
+        "runs_computed": execution.computed,
+        "runs_skipped": execution.skipped,
+        "runs_failed": execution.failed,
+        "profiles": "",
+    }
+    if study.kind in ("lhs", "sobol"):
+        attrs.update(samples=study.samples, seed=study.seed)
+    if results:
+        _profiles(study, results, dims, shape, where, data, coords, attrs)
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _profiles(
+    study: Study,
+    results: dict[str, dict[str, NDArray[Any]]],
+    dims: tuple[str, ...],
+    shape: tuple[int, ...],
+    where: Any,
+    data: dict[str, Any],
+    coords: dict[str, Any],
+    attrs: dict[str, Any],
+) -> None:
+    """Add the profiles and forces, on common grids, to ``data`` and ``coords``."""
+    t = _union([np.asarray(r["t"], dtype=np.float64) for r in results.values()])
+    coords["time"] = ("time", t)
+    s, sdim, note = _arc_grid(results)
+    attrs["profiles"] = note
+    by_id = {r.id: r for r in study.runs}
+    if s is not None:
+        if sdim == "node":
+            coords["s"] = ("node", s)
+        else:
+            coords["s"] = ("s", s)
+        for name in ("wear", "u_nu", "p"):
+            arr = np.full((*shape, t.size, s.size), np.nan)
+            for rid, res in results.items():
+                a = _interp(s, res["contact_s"], res[name], axis=1)
+                arr[where(by_id[rid].index)] = _interp(t, res["t"], a, axis=0)
+            data[name] = ((*dims, "time", sdim), arr)
+    parts = [tuple(str(x) for x in r.get("force_parts", ())) for r in results.values()]
+    if parts and parts[0] and all(p == parts[0] for p in parts):
+        coords["part"] = ("part", np.asarray(parts[0], dtype=str))
+        coords["component"] = ("component", np.asarray(["x", "y"], dtype=str))
+        arr = np.full((*shape, t.size, len(parts[0]), 2), np.nan)
+        for rid, res in results.items():
+            arr[where(by_id[rid].index)] = _interp(t, res["t"], res["forces"], axis=0)
+        data["forces"] = ((*dims, "time", "part", "component"), arr)
+
+
+def write_dataset(ds: Any, path: str | Path) -> Path:
+    """Write ``ds`` as netCDF-4 (engine ``h5netcdf``), atomically."""
+    from ..util.atomic import atomic_file
+
+    path = Path(path)
+    with atomic_file(path) as tmp:
+        ds.to_netcdf(tmp, engine="h5netcdf")
+    return path

@@ -1,0 +1,402 @@
+"""Running the runs of a study on Dask distributed, one output directory per run.
+
+The layout of a study's output directory ``OUTDIR``:
+
+``runs/<id>/``
+    The output directory of run ``<id>`` as ``vemwear run`` writes it
+    (:mod:`vemwear.runner`: marker, lock, streamed levels, checkpoints, resume).
+``configs/<id>.toml``
+    The run's whole configuration: ``vemwear run OUTDIR/configs/<id>.toml -o
+    OUTDIR/runs/<id>`` repeats it by hand.
+``log/<id>.json``
+    The record of the run's last attempt: parameters, ``status`` (``done`` or
+    ``failed``), ``error``, ``wall_time``, the worker.
+
+Each run is one Dask task (:func:`run_task`) on a worker with one thread, its BLAS
+limited to one thread (the runs are the parallelism). A task that raises is retried
+once (Dask's ``retries``), then recorded as failed with its error; it never stops the
+others. The tasks of a worker that dies are rescheduled by Dask onto the others. A run
+whose directory holds a complete result is skipped, so a study stopped and started again
+only computes what is missing; a run stopped half-way resumes from its checkpoint.
+The output directory must be on a file system every worker sees.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import os
+import socket
+import sys
+import time
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from ..util.atomic import write_atomic
+from .design import RunSpec, StudyError, params_text
+
+__all__ = [
+    "CONFIGS_DIR",
+    "LOG_DIR",
+    "RUNS_DIR",
+    "Execution",
+    "RunFailed",
+    "is_complete",
+    "open_study_dir",
+    "read_record",
+    "run_all",
+    "run_task",
+    "study_client",
+]
+
+RUNS_DIR = "runs"
+CONFIGS_DIR = "configs"
+LOG_DIR = "log"
+
+
+class RunFailed(RuntimeError):
+    """A run raised on a worker (the message names the exception and its text)."""
+
+
+# ---------------------------------------------------------------------------- the client
+@contextlib.contextmanager
+def study_client(
+    client: Any = None,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    say: Callable[[str], None] | None = None,
+) -> Iterator[Any]:
+    """A Dask client for a study: ``client`` as it is, one connected to ``scheduler``,
+    or an embedded ``LocalCluster`` of ``workers`` (default ``os.cpu_count()``) processes
+    with one thread each, on 127.0.0.1. Clients and clusters made here are closed at the
+    end; the dashboard address is passed to ``say``."""
+    if client is not None:
+        yield client
+        return
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            own = Client(scheduler, timeout=20)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise StudyError(f"--scheduler {scheduler}: cannot connect: {exc}") from None
+        try:
+            _tell_dashboard(own, say)
+            yield own
+        finally:
+            own.close()
+        return
+    n = workers or os.cpu_count() or 1
+    with contextlib.ExitStack() as stack:
+        cluster = stack.enter_context(
+            LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address="127.0.0.1:8787",
+                silence_logs=logging.ERROR,
+            )
+        )
+        own = stack.enter_context(Client(cluster))
+        _tell_dashboard(own, say)
+        yield own
+
+
+def _tell_dashboard(client: Any, say: Callable[[str], None] | None) -> None:
+    if say is None:
+        return
+    try:
+        import bokeh  # noqa: F401
+
+        note = ""
+    except ImportError:
+        note = " (install bokeh to serve it)"
+    n = len(client.scheduler_info().get("workers", {}))
+    say(f"vemwear: Dask: {n} workers; dashboard {client.dashboard_link}{note}")
+
+
+def _worker_plugin() -> Any:
+    """A Dask worker plugin: BLAS at one thread and the library imported when a worker
+    starts (also on workers that join later), so that runs do not pay the imports."""
+    from distributed.diagnostics.plugin import WorkerPlugin
+
+    class VemwearWorker(WorkerPlugin):  # type: ignore[misc]
+        name = "vemwear"
+
+        def setup(self, worker: Any) -> None:
+            prepare_worker()
+
+    return VemwearWorker()
+
+
+def prepare_worker() -> None:
+    """Limit the BLAS pools of this process to one thread; import what a run needs."""
+    from importlib import import_module
+
+    from threadpoolctl import threadpool_limits
+
+    for mod in (
+        "vemwear.config.build",
+        "vemwear.config.overrides",
+        "vemwear.runner.run",
+        "vemwear.runner.checkpoint",
+        "vemwear.simulate.levels",
+        "vemwear.post.outputs",
+        "vemwear.post.forces",
+        "vemwear.post.stream",
+        "scipy.spatial",
+    ):
+        import_module(mod)
+    threadpool_limits(limits=1)
+
+
+# ---------------------------------------------------------------------------- the output
+def open_study_dir(
+    outdir: str | os.PathLike[str], command: str, protect: Sequence[Any] = ()
+) -> Path:
+    """The study's output directory: a new or empty one, or (to continue a stopped
+    study) one that an earlier ``vemwear {command}`` wrote. Anything else is refused
+    with an :class:`~vemwear.runner.OutputDirError` (exit code 2)."""
+    from ..runner.outdir import (
+        OutputDirError,
+        check_output_dir,
+        prepare_output_dir,
+        read_marker,
+        write_marker,
+    )
+
+    out = Path(outdir).expanduser().absolute()
+    marker = read_marker(out) if out.is_dir() else None
+    keep = [p for p in protect if p is not None]
+    if marker is not None and marker.get("command") == command:
+        check_output_dir(out, force=True, protect=keep)  # place, lock, writable
+    elif marker is not None:
+        raise OutputDirError(
+            f"{out} holds the output of `vemwear {marker.get('command', 'run')}`, not of "
+            f"`vemwear {command}`; choose another output directory"
+        )
+    else:
+        prepare_output_dir(out, protect=keep, command=command)
+    for d in (RUNS_DIR, CONFIGS_DIR, LOG_DIR):
+        (out / d).mkdir(exist_ok=True)
+    old = read_marker(out) or {}
+    names = {*old.get("files", []), RUNS_DIR, CONFIGS_DIR, LOG_DIR}
+    write_marker(out, "running", sorted(names), command=command)
+    return out
+
+
+def is_complete(rundir: Path) -> bool:
+    """Whether ``rundir`` holds the complete result of a run."""
+    from ..runner.outdir import read_marker
+
+    m = read_marker(rundir) if rundir.is_dir() else None
+    return bool(m and m.get("state") == "complete" and (rundir / "result.npz").is_file())
+
+
+def read_record(out: Path, rid: str) -> dict[str, Any] | None:
+    """The logged record of run ``rid``, or None."""
+    try:
+        rec = json.loads((out / LOG_DIR / f"{rid}.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return rec if isinstance(rec, dict) else None
+
+
+def _write_record(out: Path, rec: dict[str, Any]) -> None:
+    write_atomic(out / LOG_DIR / f"{rec['id']}.json", json.dumps(rec, indent=2) + "\n")
+
+
+# ---------------------------------------------------------------------------- the task
+def _wait_unlocked(rundir: Path) -> None:
+    """Wait while another process writes into ``rundir`` (e.g. a task of a stopped study
+    that still runs on a worker); the lock is released when it ends, in any way."""
+    from ..runner.outdir import locked_by
+
+    while rundir.is_dir() and locked_by(rundir) is not None:
+        time.sleep(0.2)
+
+
+def _execute(config_path: Path, rundir: Path) -> None:
+    """One run of ``config_path`` into ``rundir`` through :mod:`vemwear.runner`:
+    resumed from its checkpoint if a stopped attempt left one, else from the start."""
+    from ..config import load_config
+    from ..runner import ResumeError, execute_run, prepare_run
+    from ..runner.checkpoint import CHECKPOINT_NAME
+
+    cfg = load_config(config_path)
+    plan = None
+    if cfg.cycles is None and (rundir / CHECKPOINT_NAME).is_file():
+        with contextlib.suppress(ResumeError):
+            plan = prepare_run(cfg, config_path, rundir, cfg.solver, resume=True)
+    if plan is None:
+        plan = prepare_run(cfg, config_path, rundir, cfg.solver, force=True)
+    if cfg.cycles is not None:
+        from ..runner.cycles import execute_cycles
+
+        execute_cycles(plan, progress=False)
+        return
+    result = execute_run(plan, progress=False)
+    if isinstance(result, str):  # the arrays did not fit in memory: result.h5 only
+        raise RunFailed(result)
+
+
+def run_task(rid: str, params: dict[str, Any], config_text: str, outdir: str) -> dict[str, Any]:
+    """Run one configuration into ``OUTDIR/runs/<rid>`` (a Dask task).
+
+    Returns the run's record (also written to ``OUTDIR/log/<rid>.json``), with
+    ``executed`` False if the directory already held a complete result.
+
+    Raises
+    ------
+    RunFailed
+        Naming the error of the run (Dask retries the task once, then the study
+        records the run as failed).
+    """
+    from threadpoolctl import threadpool_limits
+
+    out = Path(outdir)
+    rundir = out / RUNS_DIR / rid
+    config_path = out / CONFIGS_DIR / f"{rid}.toml"
+    t0 = time.perf_counter()
+    started = datetime.now(UTC).isoformat(timespec="seconds")
+    rec: dict[str, Any] = {
+        "id": rid,
+        "params": params,
+        "status": "done",
+        "error": "",
+        "started": started,
+        "worker": f"{socket.gethostname()}:{os.getpid()}",
+    }
+    _wait_unlocked(rundir)
+    if is_complete(rundir):
+        old = read_record(out, rid) or {}
+        return {**rec, "wall_time": old.get("wall_time", float("nan")), "executed": False}
+    try:
+        if not config_path.is_file() or config_path.read_text(encoding="utf-8") != config_text:
+            write_atomic(config_path, config_text)
+        with threadpool_limits(limits=1):
+            _execute(config_path, rundir)
+    except Exception as exc:
+        note = getattr(exc, "vemwear_note", "")
+        raise RunFailed(f"{type(exc).__name__}: {exc}{note}") from None
+    rec.update(wall_time=time.perf_counter() - t0, executed=True)
+    _write_record(out, rec)
+    return rec
+
+
+# ---------------------------------------------------------------------------- the study
+@dataclass
+class Execution:
+    """What one execution of a study did.
+
+    Attributes
+    ----------
+    records : dict
+        Run id -> its record (``status``, ``error``, ``wall_time``, ``executed``).
+    computed, skipped, failed : int
+        Runs computed now, found complete from an earlier execution, failed.
+    seconds : float
+        Wall time of the execution.
+    """
+
+    records: dict[str, dict[str, Any]] = field(default_factory=dict)
+    computed: int = 0
+    skipped: int = 0
+    failed: int = 0
+    seconds: float = 0.0
+
+
+def run_all(
+    runs: Sequence[RunSpec],
+    out: Path,
+    client: Any,
+    *,
+    retries: int = 1,
+    progress: bool = True,
+) -> Execution:
+    """Run every run not yet complete in ``out`` on ``client``'s cluster.
+
+    Failed runs (after ``retries``) are recorded in ``out/log`` with their error; the
+    others go on. Ctrl-C cancels the tasks not yet started and re-raises.
+    """
+    from distributed import as_completed
+    from tqdm import tqdm
+
+    t0 = time.perf_counter()
+    ex = Execution()
+    if runs:
+        client.register_plugin(_worker_plugin(), name="vemwear")
+    todo = []
+    for r in runs:
+        if is_complete(out / RUNS_DIR / r.id):
+            old = read_record(out, r.id) or {}
+            ex.records[r.id] = {
+                "id": r.id,
+                "params": r.params,
+                "status": "done",
+                "error": "",
+                "wall_time": old.get("wall_time", float("nan")),
+                "executed": False,
+            }
+            ex.skipped += 1
+        else:
+            todo.append(r)
+    bar = tqdm(
+        total=len(runs),
+        initial=ex.skipped,
+        unit="run",
+        desc="vemwear: runs",
+        disable=not progress,
+        file=sys.stderr,
+    )
+    futures = {
+        client.submit(
+            run_task,
+            r.id,
+            r.params,
+            r.toml(),
+            str(out),
+            key=f"vemwear-run-{r.id}-{os.urandom(4).hex()}",
+            retries=retries,
+            pure=False,
+        ): r
+        for r in todo
+    }
+    try:
+        for fut in as_completed(list(futures)):
+            r = futures[fut]
+            if fut.status == "finished":
+                rec = fut.result()
+                ex.computed += bool(rec.get("executed"))
+                ex.skipped += not rec.get("executed")
+            else:
+                err = fut.exception()
+                msg = str(err) if isinstance(err, RunFailed) else f"{type(err).__name__}: {err}"
+                rec = {
+                    "id": r.id,
+                    "params": r.params,
+                    "status": "failed",
+                    "error": msg,
+                    "wall_time": float("nan"),
+                    "executed": True,
+                    "finished": datetime.now(UTC).isoformat(timespec="seconds"),
+                }
+                _write_record(out, rec)
+                ex.failed += 1
+                bar.write(f"vemwear: run {r.id} ({params_text(r.params)}) failed: {msg}")
+            ex.records[r.id] = rec
+            fut.release()
+            bar.update(1)
+    except BaseException:
+        client.cancel(list(futures))
+        raise
+    finally:
+        bar.close()
+    ex.seconds = time.perf_counter() - t0
+    return ex
