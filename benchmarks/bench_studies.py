@@ -5,8 +5,8 @@ from 1 to 10; no figures or ParaView output), each through vemwear.runner into i
 directory:
 
 - serial: one process, one run after the other (load_config, prepare_run, execute_run);
-- study: ``vemwear.studies.sweep`` on a LocalCluster of W single-threaded workers
-  (the cluster's start is timed apart from the sweep).
+- study: ``vemwear.studies.sweep`` on the LocalCluster a sweep makes (W single-threaded
+  workers; the cluster's start is timed apart from the sweep).
 
 Reported: wall times, the study's overhead per run (W x study wall / N minus the serial
 time per run), the speed-up (with and without the cluster's start), and the start-up
@@ -89,12 +89,8 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=16, help="squares per unit length (1/h)")
     args = ap.parse_args()
 
-    import logging
-
-    from distributed import Client, LocalCluster
-
     from vemwear.studies import load_study, sweep
-    from vemwear.studies.execute import prepare_worker
+    from vemwear.studies.execute import prepare_worker, study_client
 
     tmp = Path(tempfile.mkdtemp(prefix="bench-studies-"))
     try:
@@ -112,22 +108,11 @@ def main() -> None:
         S, parts = serial(study, tmp / "serial")
 
         t = time.perf_counter()
-        cluster = LocalCluster(
-            n_workers=args.workers,
-            threads_per_worker=1,
-            host="127.0.0.1",
-            dashboard_address=None,
-            silence_logs=logging.ERROR,
-        )
-        client = Client(cluster)
-        C = time.perf_counter() - t
-        try:
+        with study_client(workers=args.workers, say=None) as client:  # what sweep makes
+            C = time.perf_counter() - t
             t = time.perf_counter()
             ds = sweep(study, tmp / "study", client=client, progress=False, figures=False)
             W = time.perf_counter() - t
-        finally:
-            client.close()
-            cluster.close()
         assert int(ds.attrs["runs_computed"]) == args.runs and int(ds.attrs["runs_failed"]) == 0
         wt = np.asarray(ds["wall_time"].values, dtype=float)
         s = S / args.runs
