@@ -178,3 +178,40 @@ def test_solver_threads_limit_the_openblas_pools(monkeypatch):
     monkeypatch.setenv("VEMWEAR_BLAS_THREADS", "keep")
     with solver_threads():
         assert openblas_threads() == before
+
+
+def test_kept_factorizations_are_reused_only_for_the_same_matrix(monkeypatch):
+    """With keep_factorizations, runs that change only contact data (kappa, mu) reuse one
+    factorization and give bitwise the results of fresh ones; another mesh does not."""
+    fresh = [simulate(ex52.problem(mu, k, divisions=(16, 8), steps=8)) for mu, k in CASES]
+    made: list[str] = []
+    for name, cls in (("scipy", "SuperLUSchur"), ("pardiso", "PardisoSchur")):
+        mod = backends._module(name)
+        base = getattr(mod, cls)
+        monkeypatch.setattr(
+            mod, cls, type(cls, (base,), {"__init__": _counted(base.__init__, made)})
+        )
+    try:
+        backends.keep_factorizations(1)
+        kept = [simulate(ex52.problem(mu, k, divisions=(16, 8), steps=8)) for mu, k in CASES]
+        assert len(made) == 1  # the second run found the first one's factorization
+        other = simulate(ex52.problem(0.2, 2.0, divisions=(8, 4), steps=8))
+        assert len(made) == 2 and len(backends._KEPT) == 1
+    finally:
+        backends.keep_factorizations(0)
+    assert not backends._KEPT
+    for a, b in zip(kept, fresh, strict=True):
+        for k in ("u", "wear", "p_rigid", "p_soft"):
+            assert np.array_equal(getattr(a, k), getattr(b, k)), k
+    assert other.wear.shape[1] < kept[0].wear.shape[1]
+
+
+CASES = ((0.2, 2.0), (0.6, 10.0))
+
+
+def _counted(init, made):
+    def __init__(self, *args, **kwargs):
+        made.append(type(self).__name__)
+        init(self, *args, **kwargs)
+
+    return __init__

@@ -154,10 +154,17 @@ def _worker_plugin() -> Any:
 
 
 def prepare_worker() -> None:
-    """Limit the BLAS pools of this process to one thread; import what a run needs."""
+    """Limit the BLAS pools of this process to one thread; import what a run needs; keep
+    the last factorization of the stiffness, so that runs that change only contact data,
+    loads or the time grid (the usual sweep axes) reuse it
+    (:func:`vemwear.solvers.backends.keep_factorizations`)."""
     from importlib import import_module
 
     from threadpoolctl import threadpool_limits
+
+    from ..solvers.backends import keep_factorizations
+
+    keep_factorizations(1)
 
     for mod in (
         "vemwear.config.build",

@@ -17,7 +17,9 @@ interface, plus one line in :data:`_MODULES`.
 
 from __future__ import annotations
 
+import hashlib
 import importlib
+from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -103,6 +105,43 @@ def factorize(
         return _module("scipy").SuperLUFactor(A, symmetric=symmetric)
 
 
+#: Schur factorizations kept for reuse (see :func:`keep_factorizations`), newest last.
+_KEPT: OrderedDict[bytes, SchurFactorization] = OrderedDict()
+_KEEP = 0
+
+
+def keep_factorizations(n: int) -> None:
+    """Keep the last ``n`` Schur factorizations of this process for reuse (0: none, the
+    default).
+
+    Runs of a parameter study that change only the contact data, the loads or the time
+    grid (kappa, mu, g, the compliance law, v*) have the same stiffness and the same
+    contact dofs; with ``n >= 1`` the second such run in a process reuses the first
+    one's factorization instead of computing it again. Factorizations are recognised by
+    a digest of the matrix, the Schur dofs, the dof points and the backend, so a reused
+    one is that of the same matrix, and the results are bitwise those of a fresh one
+    (the factorizations are not changed by solving). Each kept factorization holds its
+    memory until it is evicted.
+    """
+    global _KEEP
+    if n < 0:
+        raise ValueError(f"keep_factorizations: n must be >= 0, got {n}")
+    _KEEP = int(n)
+    while len(_KEPT) > _KEEP:
+        _KEPT.popitem(last=False)
+
+
+def _digest(K: sp.spmatrix, *arrays: NDArray[Any], backend: str) -> bytes:
+    A = sp.csr_matrix(K)
+    h = hashlib.blake2b(digest_size=20)
+    h.update(backend.encode())
+    for a in (np.asarray(A.shape), A.indptr, A.indices, A.data, *arrays):
+        a = np.ascontiguousarray(a)
+        h.update(str((a.dtype.str, a.shape)).encode())
+        h.update(a.data)
+    return h.digest()
+
+
 def schur_factorize(
     K: sp.spmatrix,
     last: NDArray[np.int64],
@@ -110,6 +149,9 @@ def schur_factorize(
     backend: str = "auto",
 ) -> SchurFactorization:
     """Factorize SPD ``K`` once, with the block of ``K^{-1}`` on the dofs ``last``.
+
+    With :func:`keep_factorizations` on, a factorization of the same matrix and dofs
+    made earlier in this process is returned instead.
 
     Parameters
     ----------
@@ -119,10 +161,20 @@ def schur_factorize(
     backend : a name of :data:`BACKENDS`
     """
     chosen = resolve_backend(backend)
+    key = _digest(K, last, points, backend=chosen) if _KEEP else b""
+    if key in _KEPT:
+        _KEPT.move_to_end(key)
+        return _KEPT[key]
     with _failures(chosen):
         if chosen == "pardiso":
-            return _module("pardiso").PardisoSchur(K, last, points)
-        return _module("scipy").SuperLUSchur(K, last, points)
+            factor: SchurFactorization = _module("pardiso").PardisoSchur(K, last, points)
+        else:
+            factor = _module("scipy").SuperLUSchur(K, last, points)
+    if _KEEP:
+        _KEPT[key] = factor
+        while len(_KEPT) > _KEEP:
+            _KEPT.popitem(last=False)
+    return factor
 
 
 @contextmanager
@@ -149,6 +201,7 @@ __all__ = [
     "compliance_from_schur",
     "factorize",
     "is_available",
+    "keep_factorizations",
     "resolve_backend",
     "schur_factorize",
 ]
