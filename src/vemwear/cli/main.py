@@ -145,8 +145,8 @@ def _setup_example(p: argparse.ArgumentParser) -> None:
         "name",
         metavar="NAME",
         nargs="?",
-        choices=list(examples),
-        help="example number: " + ", ".join(examples),
+        choices=[*examples, "orders"],
+        help="example number: " + ", ".join(examples) + "; or orders (k = 1 against k = 2)",
     )
     p.add_argument("--list", action="store_true", help="list the examples and exit")
     p.add_argument(
@@ -482,6 +482,10 @@ def cmd_example(args: argparse.Namespace) -> int:
         return EXIT_OK
     if args.name is None or args.outdir is None:
         raise UsageError("example: give NAME and -o OUTDIR (or --list)")
+    if args.name == "orders":  # not a paper example: vemwear.paper.orders
+        from ..paper.orders import cmd_example as orders_example
+
+        return orders_example(args)
     from ..paper import load_example
     from ..runner import atomic_output_dir, check_output_dir
     from ..simulate import SolverOptions

@@ -1,5 +1,9 @@
 """ParaView output: one ``.vtu`` file per time level and a ``.pvd`` collection.
 
+For a run of order k = 2 that kept all its dofs, every ``.vtu`` holds the refined
+visualisation mesh of :mod:`vemwear.post.quadratic` instead (triangles through the vertex
+averages and edge midpoints, the quadratic field sampled there).
+
 Every ``.vtu`` holds the polygonal mesh (triangles, quads and general polygons) with
 
 point data
@@ -34,7 +38,7 @@ from numpy.typing import NDArray
 from ..mesh.io import to_meshio
 from ..mesh.polymesh import Mesh
 from ..util.atomic import write_atomic
-from ..vem.local import Material
+from ..vem.local import Material, strain_stress
 from ..vem.projection import Projection
 
 if TYPE_CHECKING:
@@ -71,17 +75,7 @@ def cell_strain_stress(
         ``sqrt(((s_xx - s_yy)^2 + (s_yy - s_zz)^2 + (s_zz - s_xx)^2) / 2 + 3 s_xy^2)``.
     """
     E = (Projection(mesh) if projection is None else projection).strain(u)
-    tr = E[:, 0, 0] + E[:, 1, 1]
-    lam, eta = float(material.lam), float(material.eta)
-    strain = np.zeros((mesh.n_cells, 3, 3))
-    strain[:, :2, :2] = E
-    stress = 2.0 * eta * strain
-    stress[:, 0, 0] += lam * tr
-    stress[:, 1, 1] += lam * tr
-    stress[:, 2, 2] = lam * tr
-    sxx, syy, szz, sxy = stress[:, 0, 0], stress[:, 1, 1], stress[:, 2, 2], stress[:, 0, 1]
-    vm = np.sqrt(0.5 * ((sxx - syy) ** 2 + (syy - szz) ** 2 + (szz - sxx) ** 2) + 3.0 * sxy**2)
-    return strain, stress, vm
+    return strain_stress(E, material)
 
 
 def _block_order(mesh: Mesh) -> list[NDArray[np.int64]]:
@@ -188,13 +182,25 @@ def write_vtk_series(
     chosen = [int(v) for v in result.u_levels] if levels is None else _levels(levels, L)
     width = max(4, len(str(L - 1)))
     projection = Projection(mesh)
-    base = to_meshio(mesh, with_boundary=False)
-    order = _block_order(mesh)
-    cell_id = [ids.astype(np.int64) for ids in order]
+    from .quadratic import has_quadratic_dofs, refined_level_fields, refined_mesh
+
+    refined = refined_mesh(mesh) if has_quadratic_dofs(result) else None
+    if refined is None:
+        base = to_meshio(mesh, with_boundary=False)
+        order = _block_order(mesh)
+    else:  # k = 2: the refined visualisation mesh of vemwear.post.quadratic
+        pts3 = np.column_stack([refined.points, np.zeros(len(refined.points))])
+        base = meshio.Mesh(pts3, [("triangle", refined.triangles)])
+        order = [np.arange(len(refined.triangles))]
+    cell_id = [ids.astype(np.int64) for ids in order] if refined is None else [refined.parent]
     entries: list[tuple[float, str]] = []
     written: set[str] = set()
     for lv in chosen:
-        point_data, cells = level_fields(result, lv, projection)
+        point_data, cells = (
+            level_fields(result, lv, projection)
+            if refined is None
+            else refined_level_fields(result, lv, refined)
+        )
         cell_data: dict[str, list[NDArray[Any]]] = {
             k: [v[ids] for ids in order] for k, v in cells.items()
         }

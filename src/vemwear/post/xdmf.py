@@ -8,6 +8,12 @@ level nor all levels in memory. The fields are those of the VTU series
 ``u_nu``, ``penetration``, ``lam``, ``p``, ``contact``; cell data ``strain``,
 ``stress`` (3x3 tensors), ``von_mises``, ``cell_id``.
 
+For a run of order k = 2 that kept all its dofs (:attr:`vemwear.simulate.Result.dofs`),
+the grid is the refined visualisation mesh of :mod:`vemwear.post.quadratic` instead (a
+``Triangle`` topology: every n-gon split into 2n triangles through its vertex average and
+edge midpoints), with the quadratic field's values at the midpoints and ``Pi u`` at the
+vertex averages; ``cell_id`` is then the cell of every triangle.
+
 The cells are written as an XDMF ``Mixed`` topology: triangles (type 4) and
 quadrilaterals (type 5) as such, every other polygon as type 3 followed by its vertex
 count. meshio's XDMF writer has no general polygons, so the XML is written here; the
@@ -28,6 +34,7 @@ from numpy.typing import NDArray
 
 from ..util.atomic import atomic_file
 from ..vem.projection import Projection
+from .quadratic import has_quadratic_dofs, refined_level_fields, refined_mesh
 from .vtk import level_fields
 
 if TYPE_CHECKING:
@@ -108,23 +115,33 @@ def write_xdmf_series(
     mesh = result.problem.mesh
     chosen = [int(v) for v in (result.u_levels if levels is None else levels)]
     h5name = f"{name}.h5"
-    topo = mixed_topology(mesh)
     projection = Projection(mesh)
     grids: list[str] = []
+    refined = refined_mesh(mesh) if has_quadratic_dofs(result) else None
+    if refined is None:
+        topo, points = mixed_topology(mesh), np.asarray(mesh.points, dtype=np.float64)
+        cell_id = np.arange(mesh.n_cells, dtype=np.int64)
+        kind, n_elements = "Mixed", mesh.n_cells
+    else:
+        topo, points = refined.triangles, np.asarray(refined.points, dtype=np.float64)
+        cell_id, kind, n_elements = refined.parent, "Triangle", len(refined.triangles)
     mesh_items = (
-        f'<Topology TopologyType="Mixed" NumberOfElements="{mesh.n_cells}">'
+        f'<Topology TopologyType="{kind}" NumberOfElements="{n_elements}">'
         f"{_item(topo.shape, topo.dtype, h5name, '/mesh/topology')}</Topology>"
         f'<Geometry GeometryType="XY">'
-        f"{_item(mesh.points.shape, mesh.points.dtype, h5name, '/mesh/points')}</Geometry>"
+        f"{_item(points.shape, points.dtype, h5name, '/mesh/points')}</Geometry>"
     )
-    cell_id = np.arange(mesh.n_cells, dtype=np.int64)
     with atomic_file(out / h5name) as tmp_h5:
         with h5py.File(tmp_h5, "w") as f:
             f["mesh/topology"] = topo
-            f["mesh/points"] = np.asarray(mesh.points, dtype=np.float64)
+            f["mesh/points"] = points
             f["mesh/cell_id"] = cell_id
             for j, lv in enumerate(chosen):
-                point_data, cell_data = level_fields(result, lv, projection)
+                point_data, cell_data = (
+                    level_fields(result, lv, projection)
+                    if refined is None
+                    else refined_level_fields(result, lv, refined)
+                )
                 attrs = []
                 for center, fields in (("Node", point_data), ("Cell", cell_data)):
                     for key, value in fields.items():

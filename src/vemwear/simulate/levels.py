@@ -112,6 +112,16 @@ def run_levels(
         (p.level, p.w, d.step_data(p.level, p.w), p.solution) for p in state.pending
     ]
 
+    # sinks with a ``dofs`` method also get every dof of a higher-order space (k = 2:
+    # the edge and cell means besides the vertex values), e.g. for the ParaView output
+    put_dofs = getattr(sink, "dofs", None) if d.space.order > 1 else None
+
+    def give(n_: int, u_free: Any, t_: float, res: Any) -> None:
+        full = d.full_dofs(u_free, t_)
+        sink.displacement(n_, d.space.vertex_values(full), res)
+        if put_dofs is not None:
+            put_dofs(n_, full)
+
     def flush() -> None:
         if not pending:
             return
@@ -119,7 +129,7 @@ def run_levels(
             for n_, _, st, so in pending:
                 full_sol = step_solver.solve(st, so, recover=True)
                 res = np.array([full_sol.residuals[k] for k in RESIDUAL_NAMES])
-                sink.displacement(n_, d.full_displacement(full_sol.u, st.t), res)
+                give(n_, full_sol.u, st.t, res)
             pending.clear()
             return
         X = step_solver.recover_many(
@@ -134,7 +144,7 @@ def run_levels(
             full = fulls[j]
             check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)
             res = np.array([full[k] for k in RESIDUAL_NAMES])
-            sink.displacement(n_, d.full_displacement(X[:, j], st.t), res)
+            give(n_, X[:, j], st.t, res)
         pending.clear()
 
     def current() -> LoopState:
@@ -155,7 +165,7 @@ def run_levels(
             sink.level(n, w, d.physical(sol, step, step_solver))
             if store_here:
                 if sol.u is not None:
-                    sink.displacement(n, d.full_displacement(sol.u, step.t), None)
+                    give(n, sol.u, step.t, None)
                 else:
                     pending.append((n, w, step, sol))
             if callback is not None:

@@ -62,6 +62,11 @@ class Result:
         Force resultants on the body per kept level: of every contact part's layer,
         then the reaction of every clamped or prescribed part (the rows of
         :attr:`force_parts`).
+    dofs : (S, n_dofs) ndarray, optional
+        Every dof of the displacement at the stored levels, for spaces of order k > 1
+        (k = 2: vertex values, edge and cell means, :mod:`vemwear.vem.dofs2`) when the
+        run kept them (:func:`simulate` does); ``u`` holds the vertex values only. None
+        for k = 1 (``u`` is all the dofs).
     """
 
     problem: Problem
@@ -83,6 +88,7 @@ class Result:
     solver: dict[str, Any] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
     forces: NDArray[np.float64] | None = None
+    dofs: NDArray[np.float64] | None = None
 
     RESIDUAL_NAMES = RESIDUAL_NAMES
 
@@ -266,6 +272,7 @@ class MemorySink:
             completed=0,
             levels=plan.levels.copy(),
             forces=np.zeros((K, len(d.force_parts), 2)),
+            dofs=np.zeros((len(plan.u_levels), d.n_dof)) if problem.order > 1 else None,
         )
 
     def level(self, n: int, w: NDArray[np.float64], solution: StepSolution) -> None:
@@ -286,6 +293,11 @@ class MemorySink:
         if residuals is not None and self.row[n] >= 0:
             self.result.residuals[self.row[n]] = residuals
 
+    def dofs(self, n: int, u: NDArray[np.float64]) -> None:
+        """Every dof of the displacement at level n (spaces of order k > 1)."""
+        if self.result.dofs is not None:
+            self.result.dofs[self.slot[n]] = u
+
     def checkpoint(self, state: LoopState) -> None:
         self.result.completed = state.complete_upto
 
@@ -302,7 +314,15 @@ def _truncate(r: Result, c: int) -> Result:
     }
     for a in arrays.values():
         a[levels >= c] = 0
-    return replace(r, u=r.u[keep].copy(), u_levels=r.u_levels[keep].copy(), completed=c, **arrays)
+    dofs = None if r.dofs is None else r.dofs[keep].copy()
+    return replace(
+        r,
+        u=r.u[keep].copy(),
+        u_levels=r.u_levels[keep].copy(),
+        completed=c,
+        dofs=dofs,
+        **arrays,
+    )
 
 
 def _restart(out: Result, prev: Result, problem: Problem) -> LoopState:
@@ -322,9 +342,13 @@ def _restart(out: Result, prev: Result, problem: Problem) -> LoopState:
             getattr(out, name)[:c] = getattr(prev, name)[:c]
     slot = -np.ones(len(out.t), dtype=np.int64)
     slot[out.u_levels] = np.arange(len(out.u_levels))
+    if prev.dofs is None:  # the earlier levels' dofs are lost: keep the vertex values only
+        out.dofs = None
     for j, lv in enumerate(prev.u_levels):
         if lv < c and slot[lv] >= 0:
             out.u[slot[lv]] = prev.u[j]
+            if out.dofs is not None and prev.dofs is not None:
+                out.dofs[slot[lv]] = prev.dofs[j]
     missing = [int(lv) for lv in out.u_levels if lv < c and lv not in set(prev.u_levels.tolist())]
     if missing:
         raise ValueError(

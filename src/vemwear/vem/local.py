@@ -53,6 +53,24 @@ class Material:
         return 2.0 * self.eta
 
 
+def strain_stress(
+    E: NDArray[np.float64], material: Material
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The 3x3 strain, plane-strain stress ``sigma = 2 eta eps + lam tr(eps) I`` and von
+    Mises stress of 2x2 strains ``E`` (q, 2, 2)."""
+    tr = E[:, 0, 0] + E[:, 1, 1]
+    lam, eta = float(material.lam), float(material.eta)
+    strain = np.zeros((len(E), 3, 3))
+    strain[:, :2, :2] = E
+    stress = 2.0 * eta * strain
+    stress[:, 0, 0] += lam * tr
+    stress[:, 1, 1] += lam * tr
+    stress[:, 2, 2] = lam * tr
+    sxx, syy, szz, sxy = stress[:, 0, 0], stress[:, 1, 1], stress[:, 2, 2], stress[:, 0, 1]
+    vm = np.sqrt(0.5 * ((sxx - syy) ** 2 + (syy - szz) ** 2 + (szz - sxx) ** 2) + 3.0 * sxy**2)
+    return strain, stress, vm
+
+
 def _interleave(xx, xy, yx, yy):
     """Assemble (m, 2n, 2n) from four (m, n, n) blocks: [2j + a, 2i + c] = block_ac[j, i]."""
     m, n, _ = xx.shape
