@@ -260,8 +260,43 @@ def test_run_and_resume_k2_bitwise(
     assert main(["run", str(config), "-o", str(out), "--no-progress", "--resume"]) == 0
     assert "resumed from level 36" in capsys.readouterr().out
     b = _arrays(out)
-    for k in ("u", "wear", "u_nu", "lam", "p", "iterations", "residuals", "contact_nodes"):
+    for k in ("u", "dofs", "wear", "u_nu", "lam", "p", "iterations", "residuals"):
         assert np.array_equal(a[k], b[k]), k
+    assert np.array_equal(a["contact_nodes"], b["contact_nodes"])
+    # every dof of the stored levels, its vertex part the displacement
+    assert a["dofs"].shape[0] == a["u"].shape[0] and a["dofs"].shape[1] > a["u"][0].size
+    assert np.array_equal(a["dofs"][:, : a["u"][0].size], a["u"].reshape(len(a["u"]), -1))
+
+
+def test_run_writes_the_refined_paraview_series_k2(config: Path, tmp_path: Path) -> None:
+    """`vemwear run` of order 2 streams every dof to result.h5 and writes the ParaView
+    series on the refined mesh (vertices, edge midpoints, a point per cell)."""
+    import tomllib
+
+    import h5py
+    import meshio
+
+    from vemwear.config import apply_overrides
+    from vemwear.studies import _toml
+
+    data = apply_overrides(
+        tomllib.loads(config.read_text()), {"output.vtk": True, "output.store_u": "final"}
+    )
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(_toml.dumps(data))
+    out = tmp_path / "out"
+    assert main(["run", str(cfg), "-o", str(out), "--no-progress"]) == 0
+    mesh = load_config(cfg).problem.mesh
+    with h5py.File(out / "result.h5") as f:
+        assert f["dofs"].shape[0] == f["u"].shape[0] == 1
+    with meshio.xdmf.TimeSeriesReader(out / "solution.xdmf") as rd:
+        pts, cells = rd.read_points_cells()
+        _t, point_data, _c = rd.read_data(0)
+    n_edges = len(mesh.edges)
+    assert len(pts) == mesh.n_points + n_edges + mesh.n_cells
+    assert [c.type for c in cells] == ["triangle"]
+    u_pts = next(v for k, v in point_data.items() if np.shape(v)[-1] in (2, 3))
+    assert np.array_equal(u_pts[: mesh.n_points, :2], _arrays(out)["u"][-1])
 
 
 @pytest.mark.parametrize("method", ["newton", "newton-full"])

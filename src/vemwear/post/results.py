@@ -43,6 +43,9 @@ of arrays below, the one place where each array's name, shape and meaning is sta
                                            levels of ``u_levels`` [length]
     ``u_levels``                (S,)       the rows (indices into ``t``) whose
                                            displacement is stored
+    ``dofs``                    (S, N)     order k = 2 only: every degree of freedom
+                                           (vertex values, edge and cell means,
+                                           :mod:`vemwear.vem.dofs2`) at those levels
     ``contact_nodes``           (m,)       vertex ids of the contact nodes
     ``contact_s``               (m,)       arc length along Gamma_C from the start of
                                            the node's chain of contact edges [length]
@@ -213,6 +216,8 @@ def result_arrays(result: Result) -> dict[str, NDArray[Any]]:
         residual_names=np.array(result.RESIDUAL_NAMES, dtype=str),
         completed=np.array(int(result.completed), dtype=np.int64),
     )
+    if result.dofs is not None:
+        out["dofs"] = np.asarray(result.dofs, dtype=np.float64)
     if result.forces is not None:
         out["forces"] = np.asarray(result.forces, dtype=np.float64)
     return out
@@ -588,4 +593,5 @@ def result_from_arrays(
         solver=dict(solver or {}),
         levels=own(levels),
         forces=own(np.asarray(data["forces"], dtype=np.float64)) if "forces" in data else None,
+        dofs=own(np.asarray(data["dofs"], dtype=np.float64)) if "dofs" in data else None,
     )

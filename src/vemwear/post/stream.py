@@ -101,6 +101,9 @@ class H5Sink:
         gap = problem.nodal["gap"]
         self.gap = gap if np.any(gap) else None
         K, S, nv = len(plan.levels), len(plan.u_levels), problem.mesh.n_points
+        # k > 1: every dof of the stored levels (the ParaView output samples the field)
+        nd = problem.discrete.n_dof if problem.order > 1 else 0
+        whole = [("u", ((S, nv, 2), None))] + ([("dofs", ((S, nd), None))] if nd else [])
         shapes: dict[str, tuple[tuple[int, ...], Any]] = {
             "wear": ((K, m), np.float64),
             "u_nu": ((K, m), np.float64),
@@ -113,7 +116,7 @@ class H5Sink:
         }
         if resume:
             self.file = h5py.File(self.path, "r+")
-            for name, (shape, _) in (*shapes.items(), ("u", ((S, nv, 2), None))):
+            for name, (shape, _) in (*shapes.items(), *whole):
                 if name not in self.file or self.file[name].shape != shape:
                     self.file.close()
                     raise ValueError(f"{self.path}: dataset {name!r} missing or of another shape")
@@ -129,13 +132,14 @@ class H5Sink:
                 self.file.create_dataset(
                     name, shape=shape, dtype=dtype, chunks=chunks, dcpl=_early(h5py)
                 )
-            self.file.create_dataset(
-                "u",
-                shape=(S, nv, 2),
-                dtype=np.float64,
-                chunks=(1, nv, 2) if S else None,
-                dcpl=_early(h5py),
-            )
+            for name, (shape, _) in whole:
+                self.file.create_dataset(
+                    name,
+                    shape=shape,
+                    dtype=np.float64,
+                    chunks=(1, *shape[1:]) if S else None,
+                    dcpl=_early(h5py),
+                )
             self.file.create_dataset("completed", data=np.int64(0))
             self.file.flush()
         self.rows_per_block = max(1, min(K, _BUFFER_BYTES // (8 * 5 * max(m, 1))))
@@ -184,6 +188,11 @@ class H5Sink:
             self.buf["residuals"][r - self.buf_start] = residuals
         else:
             self.file["residuals"][r] = residuals
+
+    def dofs(self, n: int, u: NDArray[np.float64]) -> None:
+        """Write every dof of level ``n`` (a space of order k > 1; k = 1: ``u`` is all)."""
+        if "dofs" in self.file:
+            self.file["dofs"][int(self.slot[n])] = u
 
     def checkpoint(self, state: LoopState) -> None:
         """Write the buffer, flush the file to the disk, then call ``on_checkpoint``."""
