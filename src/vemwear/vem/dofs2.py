@@ -24,9 +24,11 @@ from numpy.typing import ArrayLike, NDArray
 from ..mesh.polymesh import Mesh
 from .local import Material
 from .local2 import (
+    ElementWork,
+    _check_stabilization,
     basis_gradients,
     basis_values,
-    element_matrices2,
+    element_stiffness_into,
     local_dof_count,
     local_projection2,
 )
@@ -51,7 +53,7 @@ __all__ = [
 ]
 
 #: Cells per batch of local matrices in :func:`stiffness2`.
-CHUNK = 2048
+CHUNK = 256
 
 #: Three-point Gauss rule on [0, 1]: points and weights (exact for degree 5).
 GAUSS3 = (
@@ -121,30 +123,138 @@ def cell_dofs2(mesh: Mesh, ids: NDArray[np.int64], verts: NDArray[np.int64]) -> 
     return d
 
 
+class _Pattern(NamedTuple):
+    """The CSR pattern of the k = 2 stiffness and where every local entry goes."""
+
+    indptr: NDArray[np.int64]
+    indices: NDArray[np.int32]
+    bpos: NDArray[np.int64]  # block (2 x 2) position of every local node pair, cell by cell
+    bptr: NDArray[np.int64]  # block row starts (per node)
+
+
+def _cell_nodes(mesh: Mesh) -> list[tuple[NDArray[np.int64], NDArray[np.int64]]]:
+    """Per vertex-count group: the vertex ids (m, n) and the nodes (m, 2 n + 1) of every
+    cell: vertex ``v`` is node ``v``, edge ``e`` node ``n_p + e``, cell ``k`` node
+    ``n_p + n_e + k``; global dof ``2 node + c`` (:func:`numbering2`)."""
+    npt, ne = mesh.n_points, len(mesh.edges)
+    out = []
+    for n, (ids, verts) in mesh.groups.items():
+        nodes = np.empty((len(ids), 2 * n + 1), dtype=np.int64)
+        nodes[:, :n] = verts
+        nodes[:, n : 2 * n] = npt + edge_ids(mesh, verts, np.roll(verts, -1, axis=1))
+        nodes[:, 2 * n] = npt + ne + ids
+        out.append((verts, nodes))
+    return out
+
+
+def _pattern(n_nodes: int, groups: list[tuple[NDArray[np.int64], NDArray[np.int64]]]) -> _Pattern:
+    """The sorted CSR pattern from the node pairs of every cell, by one sort.
+
+    The dofs come in 2 x 2 blocks (two components per node), so the pairs of nodes are
+    sorted (``n_nodes^2`` keys, with the entry index packed in the low bits when it fits
+    in 64 bits: a plain sort, no argsort), and row ``2 I + c`` of the scalar matrix lists
+    the columns ``2 J, 2 J + 1`` of the block row ``I``: the entry ``(2 I + c, 2 J + c')``
+    of block ``p`` (of row ``I``, length ``len_I``, start ``bptr_I``) is at
+    ``2 p + 2 bptr_I + 2 c len_I + c'``.
+    """
+    N = n_nodes
+    sizes = [nodes.shape[0] * nodes.shape[1] ** 2 for _v, nodes in groups]
+    nraw = sum(sizes)
+    ibits = max(nraw - 1, 1).bit_length()
+    packed = (N * N - 1).bit_length() + ibits <= 64
+    keys = np.empty(nraw, dtype=np.uint64 if packed else np.int64)
+    at = 0
+    for (_v, nodes), size in zip(groups, sizes, strict=True):
+        k = (nodes[:, :, None] * N + nodes[:, None, :]).reshape(-1)
+        if packed:
+            seg = keys[at : at + size]
+            np.left_shift(k.view(np.uint64), np.uint64(ibits), out=seg)
+            seg |= np.arange(at, at + size, dtype=np.uint64)
+        else:
+            keys[at : at + size] = k
+        at += size
+    if packed:
+        keys.sort()
+        order = np.bitwise_and(keys, np.uint64((1 << ibits) - 1)).view(np.int64)
+        skey = np.right_shift(keys, np.uint64(ibits), out=keys).view(np.int64)
+    else:
+        order = np.argsort(keys)
+        skey = keys[order]
+    new = np.empty(nraw, dtype=bool)
+    new[0] = True
+    np.not_equal(skey[1:], skey[:-1], out=new[1:])
+    uid = np.cumsum(new)
+    uid -= 1
+    bpos = np.empty(nraw, dtype=np.int64)
+    bpos[order] = uid
+    del order, uid
+    ukey = skey[new]
+    del skey, new
+    nnzb = len(ukey)
+    bptr = np.searchsorted(ukey, np.arange(N + 1, dtype=np.int64) * N)
+    blen = np.diff(bptr)
+    rows = np.repeat(np.arange(N, dtype=np.int64), blen)
+    cols = ukey - rows * N
+    indptr = np.empty(2 * N + 1, dtype=np.int64)
+    indptr[0] = 0
+    indptr[1::2] = 4 * bptr[:-1] + 2 * blen
+    indptr[2::2] = 4 * bptr[1:]
+    # both scalar rows of block row I list (2 J, 2 J + 1): one int64 holds the int32 pair
+    pair = np.empty((nnzb, 2), dtype=np.int32)
+    pair[:, 0] = 2 * cols
+    pair[:, 1] = pair[:, 0] + 1
+    indices = np.empty(4 * nnzb, dtype=np.int32)
+    slot = np.arange(nnzb, dtype=np.int64) + bptr[rows]  # p + bptr_I, in int64 units
+    pairs64, ind64 = pair.view(np.int64).reshape(-1), indices.view(np.int64)
+    ind64[slot] = pairs64
+    ind64[slot + blen[rows]] = pairs64
+    return _Pattern(indptr, indices, bpos, bptr)
+
+
 def stiffness2(mesh: Mesh, material: Material, stabilization: str = "paper") -> sp.csr_matrix:
-    """Assemble ``a_h`` (3.11) of k = 2 on all dofs: local matrices by vertex count in chunks
-    of :data:`CHUNK` cells, one COO scatter."""
+    """Assemble ``a_h`` (3.11) of k = 2 on all dofs.
+
+    The CSR pattern and the place of every local entry in it come first from the mesh
+    (:func:`_pattern`, one sort of the node pairs); the local matrices are then built by
+    vertex count in batches of :data:`CHUNK` cells (:func:`element_stiffness_into`, with
+    reused buffers) and added into the CSR data batch by batch (``np.add.at`` on the
+    precomputed places: cache-resident batches, no array of all entries). The result is
+    the canonical CSR matrix (sorted indices, no duplicates) of the sum of the local
+    matrices.
+    """
+    _check_stabilization(stabilization)
     num = numbering2(mesh)
     ndof = num.n_dofs
-    index = np.int32 if ndof < 2**31 - 1 else np.int64
-    total = sum(len(v) * local_dof_count(n) ** 2 for n, (_i, v) in mesh.groups.items())
-    rows, cols = np.empty(total, dtype=index), np.empty(total, dtype=index)
-    vals = np.empty(total)
-    at = 0
-    for n, (ids, verts) in mesh.groups.items():
-        nd = local_dof_count(n)
-        for a in range(0, len(verts), CHUNK):
-            v, c = verts[a : a + CHUNK], ids[a : a + CHUNK]
-            size = len(v) * nd * nd
-            vals[at : at + size] = element_matrices2(
-                mesh.points[v], material, stabilization
-            ).K.ravel()
-            d = cell_dofs2(mesh, c, v).astype(index)
-            rows[at : at + size] = np.repeat(d, nd, axis=1).ravel()
-            cols[at : at + size] = np.tile(d, (1, nd)).ravel()
-            at += size
-    A = sp.coo_matrix((vals, (rows, cols)), shape=(ndof, ndof)).tocsr()
-    A.sum_duplicates()
+    groups = _cell_nodes(mesh)
+    pat = _pattern(ndof // 2, groups)
+    bstart2 = 2 * pat.bptr[:-1]
+    blen2 = 2 * np.diff(pat.bptr)
+    data = np.zeros(len(pat.indices))
+    at = 0  # in node pairs
+    for verts, nodes in groups:
+        m_all, L = nodes.shape
+        nd = 2 * L
+        mc = min(CHUNK, m_all)
+        work = ElementWork(mc, (L - 1) // 2)
+        K_buf, pos_buf = np.empty((mc, nd, nd)), np.empty((mc, L, 2, L, 2), dtype=np.int64)
+        for a in range(0, m_all, CHUNK):
+            v, nod = verts[a : a + CHUNK], nodes[a : a + CHUNK]
+            m = len(v)
+            K, P = K_buf[:m], pos_buf[:m]
+            element_stiffness_into(mesh.points[v], material, stabilization, K, work)
+            # local dof 2 l + c: (m, l, c, l', c') -> 2 bpos + 2 bptr_I + 2 c len_I + c'
+            bp = pat.bpos[at : at + m * L * L].reshape(m, L, 1, L, 1)
+            row = (
+                bstart2[nod][:, :, None, None, None]
+                + blen2[nod][:, :, None, None, None] * np.arange(2)[:, None, None]
+            )
+            np.add(2 * bp, row, out=P[..., :1])
+            np.add(P[..., :1], 1, out=P[..., 1:])
+            np.add.at(data, P.reshape(-1), K.reshape(-1))  # in order: as one bincount
+            at += m * L * L
+    A = sp.csr_matrix((data, pat.indices, pat.indptr), shape=(ndof, ndof))
+    A.has_sorted_indices = True
+    A.has_canonical_format = True
     return A
 
 

@@ -42,6 +42,7 @@ Everything is batched by vertex count: arrays of shape ``(m, n, 2)`` for ``m`` c
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import numpy as np
@@ -53,12 +54,14 @@ from .quadrature import fan
 __all__ = [
     "BASIS",
     "N_BASIS",
+    "ElementWork",
     "Local2",
     "LocalProjection2",
     "basis_gradients",
     "basis_values",
     "cell_geometry",
     "element_matrices2",
+    "element_stiffness_into",
     "local_dof_count",
     "local_projection2",
     "monomials",
@@ -167,6 +170,151 @@ class Local2(NamedTuple):
     projection: LocalProjection2
 
 
+def _pairs(n: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """The vertex pairs ``i < j`` of an n-gon (for the diameters)."""
+    if n not in _PAIRS:
+        _PAIRS[n] = np.triu_indices(n, 1)
+    return _PAIRS[n]
+
+
+_PAIRS: dict[int, tuple[NDArray[np.intp], NDArray[np.intp]]] = {}
+
+#: ``D = rows @ _BT``: the dofs ``chi(q_a)`` from the monomials (or their means) at the
+#: local nodes; ``_BT[j, 12 c + a] = BASIS[a, j, c]``.
+_BT = np.ascontiguousarray(BASIS.transpose(1, 2, 0).reshape(6, 2 * N_BASIS))
+_BT.setflags(write=False)
+
+
+@functools.lru_cache(maxsize=32)
+def _constants(material: Material) -> tuple[Array, Array, Array]:
+    """Tables of a material: ``WJ`` (6, 144) with ``G = h^-2 sum_j (int_K m_j) WJ[j]``;
+    ``S`` (6, 24) with ``h sigma(q_a) N . e_c = sum_(p, t) m_p N_t S[(p, t), 12 c + a]``
+    (``p`` over 1, xi, eta and ``t`` over the components of N); ``DIV`` (2, 12) with
+    ``h^2 div sigma(q_a) . e_c = DIV[c, a]``."""
+    Dm = material.D
+    W = np.einsum("apk,kl,brl->prab", STRAIN, Dm, STRAIN)  # (3, 3, 12, 12)
+    WJ = np.zeros((6, N_BASIS, N_BASIS))
+    for p in range(3):
+        for r in range(3):
+            WJ[_PAIR[p, r]] += W[p, r]
+    SIG = np.einsum("kl,apl->apk", Dm, STRAIN)  # h sigma(q_a) = sum_p SIG[a, p] m_p (Voigt)
+    S = np.zeros((3, 2, 2, N_BASIS))  # [p, t, c, a]: (sxx nx + sxy ny, sxy nx + syy ny)
+    S[:, 0, 0], S[:, 1, 0] = SIG[:, :, 0].T, SIG[:, :, 2].T
+    S[:, 0, 1], S[:, 1, 1] = SIG[:, :, 2].T, SIG[:, :, 1].T
+    DIV = np.stack([SIG[:, 1, 0] + SIG[:, 2, 2], SIG[:, 1, 2] + SIG[:, 2, 1]])
+    out = (WJ.reshape(6, -1), S.reshape(6, 2 * N_BASIS), DIV)
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
+class ElementWork:
+    """Buffers for the element work on up to ``m`` cells with ``n`` vertices, reused from
+    batch to batch by :func:`element_stiffness_into` (fresh arrays of a few MB per batch
+    cost more in page faults than the arithmetic).
+
+    ``L[:, :, :12]`` holds ``Pi^T`` (N, 12) and ``L[:, :, 12:]`` the dofs of the basis ``D``
+    (N, 12) after :func:`_project`.
+    """
+
+    def __init__(self, m: int, n: int) -> None:
+        nd = local_dof_count(n)
+        self.m, self.n = m, n
+        self.L = np.empty((m, nd, 2 * N_BASIS))
+        self.R = np.empty((m, nd, 2 * N_BASIS))
+        self.Z = np.empty((m, nd, nd))
+        self.B = np.empty((m, nd, N_BASIS))  # a^K(v, q_a) of the dofs, transposed
+        self.D = np.empty((m, nd, N_BASIS))
+        self.U = np.empty((m, 2, n, 3, 2))
+        self.mono = np.empty((m, 2 * n, 6))
+        self.rows = np.empty((m, 2 * n + 1, 6))
+
+
+def _project(X: Array, material: Material, w: ElementWork) -> tuple[Array, ...]:
+    """``Pi`` (3.8) of a batch into ``w`` (module docstring); returns the matrices G, the
+    scaled moments ``h^-2 int_K m_j`` (m, 6), the vertex averages and the diameters.
+
+    With ``G[3:, 3:] pi_2 = B[3:]`` for the nine non-rigid ``q_a`` (``G`` vanishes on the
+    rigid motions) and the three rigid-motion rows upper triangular in ``pi_1`` (the
+    cell means of e_x, e_y are exact unit vectors, the rotation of the translations is
+    zero), ``Pi`` costs one 9 x 9 inverse and a back substitution.
+    """
+    m, n, _ = X.shape
+    WJ, S, DIV = _constants(material)
+    L, B, D, U = w.L[:m], w.B[:m], w.D[:m], w.U[:m]
+    center = X.mean(axis=1)
+    i, j = _pairs(n)
+    d = X[:, i] - X[:, j]
+    h = np.sqrt((d[..., 0] ** 2 + d[..., 1] ** 2).max(axis=1))
+    a = (X - center[:, None, :]) / h[:, None, None]  # scaled vertices
+    b = np.roll(a, -1, axis=1)
+    ax, ay, bx, by = a[..., 0], a[..., 1], b[..., 0], b[..., 1]
+    A = 0.5 * (ax * by - bx * ay)  # the fan from the vertex average, signed
+    mom = np.empty((m, 6))  # h^-2 int_K m_j, exact on the fan
+    mom[:, 0] = A.sum(axis=1)
+    mom[:, 1] = (A * (ax + bx)).sum(axis=1) / 3.0
+    mom[:, 2] = (A * (ay + by)).sum(axis=1) / 3.0
+    mom[:, 3] = (A * (ax * ax + ax * bx + bx * bx)).sum(axis=1) / 6.0
+    mom[:, 4] = (A * (2.0 * (ax * ay + bx * by) + ax * by + bx * ay)).sum(axis=1) / 12.0
+    mom[:, 5] = (A * (ay * ay + ay * by + by * by)).sum(axis=1) / 6.0
+    area = mom[:, 0]
+
+    # monomials at the vertices and the edge midpoints; D from them
+    mono = w.mono[:m]
+    x = mono[:, :, 1].reshape(m, 2, n)
+    y = mono[:, :, 2].reshape(m, 2, n)
+    x[:, 0], y[:, 0] = ax, ay
+    np.multiply(ax + bx, 0.5, out=x[:, 1])
+    np.multiply(ay + by, 0.5, out=y[:, 1])
+    mono[:, :, 0] = 1.0
+    mono[:, :, 3] = mono[:, :, 1] ** 2
+    np.multiply(mono[:, :, 1], mono[:, :, 2], out=mono[:, :, 4])
+    mono[:, :, 5] = mono[:, :, 2] ** 2
+    mv, mm = mono[:, :n], mono[:, n:]
+    rows = w.rows[:m]
+    rows[:, :n] = mv
+    rows[:, n : 2 * n] = (mv + 4.0 * mm + np.roll(mv, -1, axis=1)) / 6.0  # Simpson
+    rows[:, 2 * n] = mom / area[:, None]
+    np.matmul(rows, _BT, out=D.reshape(m, 2 * n + 1, 2 * N_BASIS))
+    L[:, :, N_BASIS:] = D
+    G = np.matmul(mom, WJ).reshape(m, N_BASIS, N_BASIS)
+
+    # a^K(v, q_a) by parts (3.8): B[:, i, a] for the local dof i
+    Nx, Ny = by - ay, ax - bx  # |e_i| n_i / h
+    um, uv = U[:, 1], U[:, 0]
+    np.multiply(mm[..., :3], Nx[..., None], out=um[..., 0])
+    np.multiply(mm[..., :3], Ny[..., None], out=um[..., 1])
+    np.multiply(mv[..., :3], (Nx + np.roll(Nx, 1, axis=1))[..., None], out=uv[..., 0])
+    np.multiply(mv[..., :3], (Ny + np.roll(Ny, 1, axis=1))[..., None], out=uv[..., 1])
+    uv -= um
+    uv -= np.roll(um, 1, axis=1)
+    uv /= 6.0
+    # Simpson on edge i with v(mid) = (6 mean_i - v_i - v_(i+1)) / 4: vertex i gets
+    # (t_i(x_i) + t_(i-1)(x_i) - t_i(mid_i) - t_(i-1)(mid_(i-1))) / 6, mean_i gets t_i(mid_i)
+    Bv = B.reshape(m, 2 * n + 1, 2 * N_BASIS)
+    np.matmul(U.reshape(m, 2 * n, 6), S, out=Bv[:, : 2 * n])
+    np.multiply(-area[:, None, None], DIV, out=B[:, 4 * n :])
+
+    # pi_2 = G22^-1 B[3:], then the rigid rows (cell mean; h / |K| int_K rot)
+    Gi = np.linalg.inv(G[:, 3:, 3:])
+    pi = L[:, :, :N_BASIS]  # Pi^T
+    np.matmul(B[:, :, 3:], Gi.transpose(0, 2, 1), out=pi[:, :, 3:])
+    R = np.empty((m, 3, N_BASIS))
+    R[:, :2] = D[:, 4 * n :]
+    np.divide(np.matmul(mom[:, :3], ROT[:, :3].T), area[:, None], out=R[:, 2])
+    W1 = -np.matmul(pi[:, :, 3:], R[:, :, 3:].transpose(0, 2, 1))  # (m, N, 3)
+    W1[:, 4 * n, 0] += 1.0
+    W1[:, 4 * n + 1, 1] += 1.0
+    W1[:, 2 * n : 4 * n, 2] += ((b - a) / area[:, None, None]).reshape(m, 2 * n)  # |e| t
+    # R[:, :, :3] is upper triangular (the rest vanishes identically)
+    pi[:, :, 2] = W1[:, :, 2] / R[:, 2, 2, None]
+    pi[:, :, 1] = (W1[:, :, 1] - R[:, 1, 2, None] * pi[:, :, 2]) / R[:, 1, 1, None]
+    pi[:, :, 0] = (
+        W1[:, :, 0] - R[:, 0, 1, None] * pi[:, :, 1] - R[:, 0, 2, None] * pi[:, :, 2]
+    ) / R[:, 0, 0, None]
+    return G, mom, center, h
+
+
 def local_projection2(X: Array, material: Material) -> LocalProjection2:
     """The projection ``Pi`` (3.8) of k = 2 with the k >= 2 rigid-motion conditions (module
     docstring), as coefficients in :data:`BASIS` of the local dofs.
@@ -179,55 +327,56 @@ def local_projection2(X: Array, material: Material) -> LocalProjection2:
         (3.8) is the energy projection: for k = 2 it depends on the Lamé coefficients.
     """
     m, n, _ = X.shape
+    w = ElementWork(m, n)
+    G, mom, center, h = _project(np.asarray(X, dtype=float), material, w)
+    pi = np.ascontiguousarray(w.L[:, :, :N_BASIS].transpose(0, 2, 1))
+    return LocalProjection2(pi, w.D, G, mom[:, 0] * h * h, center, h)
+
+
+def _check_stabilization(stabilization: str) -> None:
+    if stabilization not in STABILIZATIONS:
+        raise ValueError(
+            f"unknown stabilization {stabilization!r}; expected one of {', '.join(STABILIZATIONS)}"
+        )
+
+
+def element_stiffness_into(
+    X: Array, material: Material, stabilization: str, out: Array, w: ElementWork
+) -> tuple[Array, ...]:
+    """Write ``a_h^K`` (3.11) of a batch of cells into ``out`` (m, N, N), using the buffers
+    ``w`` (:class:`ElementWork` for at least ``m`` cells with ``n`` vertices).
+
+    With ``P = D Pi`` (the dofs of ``Pi v``), ``s`` the weight of the dofi-dofi term and
+    ``B`` the right-hand sides of (3.8): ``a_h^K = Pi^T G Pi + s (I - P)^T (I - P)
+    = Z + Z^T + s I`` with ``Z = Pi^T (s/2 D^T D Pi + B/2) - s D Pi``, one product
+    ``[Pi^T | D] [s/2 D^T D Pi + B/2 ; -s Pi]`` of inner size 24, symmetric by construction
+    (``Pi^T G Pi = Pi^T B`` as ``G Pi = B`` on the non-rigid rows and ``G`` vanishes on
+    the rigid motions).
+
+    Returns
+    -------
+    The matrices ``G``, the scaled moments, the vertex averages and the diameters.
+    """
+    m, n, _ = X.shape
     nd = local_dof_count(n)
-    center, h, mom = cell_geometry(X)
-    area = mom[:, 0]
-    hh = h[:, None, None]
-    Xn = np.roll(X, -1, axis=1)
-    mid = 0.5 * (X + Xn)
-    mv = monomials((X - center[:, None, :]) / hh)  # (m, n, 6) at the vertices
-    mm = monomials((mid - center[:, None, :]) / hh)  # at the edge midpoints
-
-    # chi_i(q_a): vertex values, edge means (Simpson, exact for quadratics), cell means
-    D = np.empty((m, nd, N_BASIS))
-    D[:, : 2 * n] = np.einsum("mij,ajc->mica", mv, BASIS).reshape(m, 2 * n, N_BASIS)
-    edge_mean = (mv + 4.0 * mm + np.roll(mv, -1, axis=1)) / 6.0
-    D[:, 2 * n : 4 * n] = np.einsum("mij,ajc->mica", edge_mean, BASIS).reshape(m, 2 * n, -1)
-    D[:, 4 * n :] = np.einsum("mj,ajc->mca", mom / area[:, None], BASIS)
-
-    # G[a, b] = a^K(q_a, q_b): C eps(q_a) : eps(q_b) is quadratic, from the moments
-    Dm = material.D
-    W = np.einsum("apk,kl,brl->prab", STRAIN, Dm, STRAIN)  # (3, 3, 12, 12)
-    G = np.einsum("mpr,prab->mab", mom[:, _PAIR], W) / (h * h)[:, None, None]
-
-    # a^K(v, q_a) from the dofs by parts (3.8); Voigt stresses h sigma(q_a) = sum_p SIG m_p
-    SIG = np.einsum("kl,apl->apk", Dm, STRAIN)  # (12, 3, 3) [a, p, k]
-    sv = np.einsum("mip,apk->miak", mv[..., :3], SIG) / hh[..., None]  # (m, n, 12, 3)
-    sm = np.einsum("mip,apk->miak", mm[..., :3], SIG) / hh[..., None]
-    d = Xn - X
-    Nrm = np.stack([d[..., 1], -d[..., 0]], axis=-1)  # |e_i| n_i
-    # Simpson on edge i with v(mid) = (6 mean_i - v_i - v_{i+1}) / 4:
-    # int_e v . t ds = [v_i . (t_i - t_mid) + v_{i+1} . (t_{i+1} - t_mid)] / 6 + mean_i . t_mid
-    t_mid = _traction(sm, Nrm)  # (m, n, 12, 2), tractions times |e_i|
-    t_start = _traction(sv, Nrm) - t_mid  # vertex i on edge i
-    t_end = _traction(np.roll(sv, -1, axis=1), Nrm) - t_mid  # vertex i + 1 on edge i
-    wv = (t_start + np.roll(t_end, 1, axis=1)) / 6.0
-    # div sigma(q_a), constant: d_k sigma = SIG[:, k + 1] / h^2
-    div = np.stack([SIG[:, 1, 0] + SIG[:, 2, 2], SIG[:, 1, 2] + SIG[:, 2, 1]], axis=-1)
-    B = np.empty((m, N_BASIS, nd))
-    B[:, :, : 2 * n] = wv.transpose(0, 2, 1, 3).reshape(m, N_BASIS, 2 * n)
-    B[:, :, 2 * n : 4 * n] = t_mid.transpose(0, 2, 1, 3).reshape(m, N_BASIS, 2 * n)
-    B[:, :, 4 * n :] = -(area / (h * h))[:, None, None] * div[None]
-
-    # rigid motions: the cell mean (rows 0, 1) and h_K / |K| times int_K rot (row 2)
-    Gt = G.copy()
-    Gt[:, :2] = D[:, 4 * n :]
-    Gt[:, 2] = np.einsum("mp,ap->ma", mom[:, :3], ROT) / area[:, None]
-    B[:, :3] = 0.0
-    B[:, 0, 4 * n] = B[:, 1, 4 * n + 1] = 1.0
-    B[:, 2, 2 * n : 4 * n] = (h / area)[:, None] * d.reshape(m, 2 * n)  # |e_i| t_i
-    pi = np.linalg.solve(Gt, B)  # (m, 12, N)
-    return LocalProjection2(pi, D, G, area, center, h)
+    geometry = _project(X, material, w)
+    L, R, D, B, Z = w.L[:m], w.R[:m], w.D[:m], w.B[:m], w.Z[:m]
+    pi = L[:, :, :N_BASIS]
+    s = np.ones(m)  # the weight of the dofi-dofi term, per cell
+    if stabilization == "eta":
+        s *= 2.0 * material.eta
+    elif stabilization == "trace":  # tr(Pi^T G Pi) / N
+        s = np.einsum("mia,mia->m", pi[:, :, 3:], B[:, :, 3:]) / nd
+    sc = s[:, None, None]
+    M = np.matmul(D.transpose(0, 2, 1), D)
+    M *= 0.5 * sc
+    np.matmul(pi, M, out=R[:, :, :N_BASIS])
+    R[:, :, 3:N_BASIS] += 0.5 * B[:, :, 3:]
+    np.multiply(pi, -sc, out=R[:, :, N_BASIS:])
+    np.matmul(L, R.transpose(0, 2, 1), out=Z)
+    np.add(Z, Z.transpose(0, 2, 1), out=out)
+    out.reshape(m, nd * nd)[:, :: nd + 1] += s[:, None]
+    return geometry
 
 
 def element_matrices2(X: Array, material: Material, stabilization: str = "paper") -> Local2:
@@ -247,21 +396,12 @@ def element_matrices2(X: Array, material: Material, stabilization: str = "paper"
     Local2
         The stiffness ``K`` (m, N, N) and the projection (:func:`local_projection2`).
     """
-    if stabilization not in STABILIZATIONS:
-        raise ValueError(
-            f"unknown stabilization {stabilization!r}; expected one of {', '.join(STABILIZATIONS)}"
-        )
-    lp = local_projection2(X, material)
-    nd = lp.dofs.shape[1]
-    K = np.matmul(lp.pi.transpose(0, 2, 1), np.matmul(lp.energy, lp.pi))  # a^K(Pi u, Pi v)
-    IP = -np.matmul(lp.dofs, lp.pi)  # I - P, P the dofs of Pi v
-    diag = np.arange(nd)
-    IP[:, diag, diag] += 1.0
-    S = np.matmul(IP.transpose(0, 2, 1), IP)  # the dofi-dofi term
-    if stabilization == "eta":
-        S *= 2.0 * material.eta
-    elif stabilization == "trace":
-        S *= (np.trace(K, axis1=1, axis2=2) / nd)[:, None, None]
-    K += S
-    K = 0.5 * (K + K.transpose(0, 2, 1))  # symmetric to round-off
-    return Local2(K, lp)
+    _check_stabilization(stabilization)
+    X = np.asarray(X, dtype=float)
+    m, n, _ = X.shape
+    nd = local_dof_count(n)
+    w = ElementWork(m, n)
+    K = np.empty((m, nd, nd))
+    G, mom, center, h = element_stiffness_into(X, material, stabilization, K, w)
+    pi = np.ascontiguousarray(w.L[:, :, :N_BASIS].transpose(0, 2, 1))
+    return Local2(K, LocalProjection2(pi, w.D, G, mom[:, 0] * h * h, center, h))
