@@ -513,8 +513,12 @@ def test_schema_command_prints_the_json_schema(capsys: pytest.CaptureFixture[str
     jsonschema.Draft202012Validator.check_schema(schema)
     check = jsonschema.Draft202012Validator(schema)
     files = [*EXAMPLES.glob("*.toml"), ROOT / "tests" / "data" / "bad" / "negative_mu.toml"]
-    for f in files:  # valid in form (the sign of mu is the Problem's business)
-        assert not list(check.iter_errors(tomllib.loads(f.read_text()))), f.name
+    configs = [tomllib.loads(f.read_text()) for f in files]
+    for f, data in zip(files, configs, strict=True):
+        if "axes" in data:  # a study file (docs/studies.md), not a configuration
+            continue
+        # valid in form (the sign of mu is the Problem's business)
+        assert not list(check.iter_errors(data)), f.name
     for path, value in [
         ("contact.muu", 0.2),
         ("contact.mu", [0.2]),
