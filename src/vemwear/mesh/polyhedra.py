@@ -12,15 +12,23 @@ Boundary faces are the faces of exactly one cell; their outward normal is their
 right-hand normal times their sign in that cell. Each boundary face carries the code of
 one named boundary part, as the boundary edges of a 2D :class:`~vemwear.mesh.Mesh`: code
 ``i`` is ``part_names[i - 1]``, 0 is untagged.
+
+:meth:`Mesh3D.from_cell_faces` builds a mesh from every cell's own face loops (shared faces
+found and stored once); the geometry (face areas, normals and centroids, cell volumes,
+centroids and diameters, :mod:`vemwear.mesh.geometry3d`) is computed once on demand.
+Generators: :mod:`.generate3d` (hexahedra, tetrahedra, prisms, the box's sides as parts),
+:mod:`.voronoi3d`; checks :mod:`.checks3d`, quality :mod:`.quality3d`, files :mod:`.io3d`,
+registry :mod:`.registry3d`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from .polymesh import PARTS, MeshError
 
@@ -130,6 +138,85 @@ class Mesh3D:
         object.__setattr__(self, "boundary_tags", tags)
         object.__setattr__(self, "part_names", names)
 
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_cell_faces(
+        cls,
+        points: ArrayLike,
+        loop_offsets: ArrayLike,
+        loop_vertices: ArrayLike,
+        loop_cells: ArrayLike,
+        n_cells: int | None = None,
+        *,
+        orient: bool = False,
+        part_names: Sequence[str] = PARTS,
+    ) -> Mesh3D:
+        """A mesh from the faces of every cell, each cell listing all its faces.
+
+        Faces met in two cells (the same set of vertices) are stored once, with the
+        loop of their first occurrence (so boundary faces keep the loop given, and
+        interior faces that of the cell met first); the sign of an occurrence is +1 if
+        its loop runs the same way as the stored one, -1 otherwise. Faces are numbered
+        in the order of their first occurrence.
+
+        Parameters
+        ----------
+        points : (n_points, 3) float array
+        loop_offsets, loop_vertices : int arrays
+            The face loops of all cells (CSR), each running counter-clockwise seen from
+            outside its cell (or all inward in a cell, with ``orient``).
+        loop_cells : (n_loops,) int array
+            The cell of every loop.
+        n_cells : int, optional
+            Number of cells (default: the largest cell id + 1).
+        orient : bool
+            Reverse every loop of the cells whose volume comes out negative (cells
+            listed with inward loops, e.g. inverted elements of a file).
+        part_names : sequence of str
+            Names of the part codes (the boundary is untagged).
+
+        Returns
+        -------
+        Mesh3D
+        """
+        from .geometry3d import cell_geometry, reverse_loops, take_loops
+
+        pts = np.asarray(points, dtype=np.float64)
+        off = np.asarray(loop_offsets, dtype=np.int64)
+        lv = np.asarray(loop_vertices, dtype=np.int64)
+        lc = np.asarray(loop_cells, dtype=np.int64)
+        nl = len(off) - 1
+        if lc.shape != (nl,):
+            raise MeshError(f"loop_cells must have one cell per loop ({nl}), got {lc.shape}")
+        nc = int(lc.max()) + 1 if n_cells is None else int(n_cells)
+        if orient and nl:
+            vol, _ = cell_geometry(pts, off, lv, lc, np.arange(nl), np.ones(nl), nc)
+            lv = reverse_loops(off, lv, (vol < 0)[lc])
+        sizes = np.diff(off)
+        rep = np.empty(nl, dtype=np.int64)  # the first loop with the same vertex set
+        forward = np.empty(nl, dtype=bool)  # the loop's direction, read from its least vertex
+        for s in np.unique(sizes):  # loops of one size at a time
+            g = np.flatnonzero(sizes == s)
+            R = lv[off[g][:, None] + np.arange(s)]
+            S = np.sort(R, axis=1)
+            order = np.lexsort(S.T[::-1])  # stable: equal rows keep increasing loop ids
+            Ss = S[order]
+            new = np.ones(len(g), dtype=bool)
+            new[1:] = np.any(Ss[1:] != Ss[:-1], axis=1)
+            rep[g[order]] = g[order[new]][np.cumsum(new) - 1]
+            rows = np.arange(len(g))
+            lo = np.argmin(R, axis=1)
+            forward[g] = R[rows, (lo + 1) % s] < R[rows, (lo - 1) % s]
+        reps, face_of_loop = np.unique(rep, return_inverse=True)
+        signs = np.where(forward == forward[rep], 1, -1).astype(np.int8)
+        foff, fv = take_loops(off, lv, reps)
+        order = np.argsort(lc, kind="stable")
+        coff = np.zeros(nc + 1, dtype=np.int64)
+        np.cumsum(np.bincount(lc, minlength=nc), out=coff[1:])
+        return cls(
+            pts, foff, fv, coff, face_of_loop[order], signs[order], part_names=tuple(part_names)
+        )
+
     # ------------------------------------------------------------------ sizes
     @property
     def n_points(self) -> int:
@@ -189,6 +276,84 @@ class Mesh3D:
             boundary_tags,
             self.part_names if part_names is None else part_names,
         )
+
+    # ------------------------------------------------------------------ geometry
+    @cached_property
+    def _face_geometry(self) -> tuple[NDArray, NDArray, NDArray]:
+        from .geometry3d import face_geometry
+
+        return face_geometry(self.points, self.face_offsets, self.face_vertices)
+
+    @cached_property
+    def face_area_vectors(self) -> NDArray[np.float64]:
+        """Area times unit right-hand normal of every face (n_faces, 3)."""
+        return self._face_geometry[0]
+
+    @cached_property
+    def face_areas(self) -> NDArray[np.float64]:
+        """Area of every face."""
+        return np.asarray(np.linalg.norm(self.face_area_vectors, axis=1))
+
+    @cached_property
+    def face_normals(self) -> NDArray[np.float64]:
+        """Unit right-hand normal of every face (n_faces, 3); 0 for a face of no area."""
+        a = self.face_areas[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(a > 0, self.face_area_vectors / a, 0.0)
+
+    @cached_property
+    def face_centroids(self) -> NDArray[np.float64]:
+        """Area centroid of every face (n_faces, 3)."""
+        return self._face_geometry[1]
+
+    @cached_property
+    def face_diameters(self) -> NDArray[np.float64]:
+        """Largest distance between two vertices of every face."""
+        from .geometry3d import group_max_distance
+
+        return group_max_distance(self.points, self.face_offsets, self.face_vertices)
+
+    @cached_property
+    def _cell_geometry(self) -> tuple[NDArray, NDArray]:
+        from .geometry3d import cell_geometry
+
+        return cell_geometry(
+            self.points,
+            self.face_offsets,
+            self.face_vertices,
+            self.cell_of_entry,
+            self.cell_faces,
+            self.cell_face_signs,
+            self.n_cells,
+            self._face_geometry,
+        )
+
+    @cached_property
+    def cell_volumes(self) -> NDArray[np.float64]:
+        """Signed volume of every cell (positive for a correctly oriented cell)."""
+        return self._cell_geometry[0]
+
+    @cached_property
+    def cell_centroids(self) -> NDArray[np.float64]:
+        """Centroid of every cell (n_cells, 3)."""
+        return self._cell_geometry[1]
+
+    @cached_property
+    def cell_diameters(self) -> NDArray[np.float64]:
+        """Largest distance between two vertices of every cell."""
+        from .geometry3d import group_max_distance
+
+        return group_max_distance(self.points, self.cell_vertex_offsets, self.cell_vertex_ids)
+
+    @cached_property
+    def edges(self) -> NDArray[np.int64]:
+        """The distinct edges of the faces, as sorted vertex pairs (n_edges, 2)."""
+        from .geometry3d import loop_next
+
+        a = self.face_vertices
+        b = a[loop_next(self.face_offsets)]
+        key = np.unique(np.minimum(a, b) * self.n_points + np.maximum(a, b))
+        return np.column_stack(np.divmod(key, self.n_points))
 
     # ------------------------------------------------------------------ cells
     @cached_property

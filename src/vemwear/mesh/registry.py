@@ -10,6 +10,10 @@ the generator functions' signatures. Option types are Python annotations (tuples
 fixed-size arrays, ``Literal`` for choices); values are checked by the generators.
 :func:`generate_mesh` turns a family and a cell count or grid into a tagged mesh of a
 rectangle (the work behind ``vemwear mesh generate``).
+
+The 3D families (meshes of a box, :class:`Mesh3D`) are registered apart, in
+:data:`vemwear.mesh.registry3d.FAMILIES_3D` (``family(name, dim=3)`` finds them); the
+configuration schema and the command line know the 2D families only so far.
 """
 
 from __future__ import annotations
@@ -19,12 +23,13 @@ import inspect
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 from numpy.typing import ArrayLike
 
 from .families import distorted_quads, hexagons, nonconvex_mesh, squares_with_hanging_nodes
 from .generate import rectangle_squares, rectangle_triangles
+from .polyhedra import Mesh3D
 from .polymesh import Mesh, MeshError
 from .voronoi import rectangle_domain, voronoi_from_seeds, voronoi_mesh
 
@@ -75,16 +80,20 @@ class Family:
     aliases : tuple of str
         Other names accepted in configuration files (the function's name).
     cells_per_division : int
-        Cells per grid rectangle (1 quadrilaterals, 2 triangles), so that a cell count
-        can be turned into ``divisions``; 0 if the count depends on them otherwise.
+        Cells per grid rectangle (1 quadrilaterals, 2 triangles; 1 hexahedra, 6
+        tetrahedra), so that a cell count can be turned into ``divisions``; 0 if the
+        count depends on them otherwise.
+    dim : int
+        2 for meshes of a rectangle (:class:`Mesh`), 3 for meshes of a box (:class:`Mesh3D`).
     """
 
     name: str
-    function: Callable[..., Mesh]
+    function: Callable[..., Mesh | Mesh3D]
     description: str
     options: tuple[Option, ...]
     aliases: tuple[str, ...] = ()
     cells_per_division: int = 0
+    dim: int = 2
 
     def estimate_cells(self, options: Mapping[str, Any]) -> int:
         """About how many cells :meth:`generate` makes with ``options``, without making
@@ -92,17 +101,18 @@ class Family:
         merged = {o.name: o.default for o in self.options} | dict(options)
         if merged.get("seeds") is not None:
             return len(merged["seeds"])
+        layers = int(merged.get("layers") or 1)  # prisms: 2D cells times layers
         if merged.get("n_cells") is not None:
-            return int(merged["n_cells"])
+            return int(merged["n_cells"]) * layers
         d = merged.get("divisions") or (1, 1)
-        nx, ny = (d, 1) if isinstance(d, int) else d  # one count (hexagons): at least a row
-        return int(nx) * int(ny) * max(self.cells_per_division, 1)
+        d = (d, 1) if isinstance(d, int) else d  # one count (hexagons): at least a row
+        return math.prod(int(n) for n in d) * max(self.cells_per_division, 1)
 
     def option(self, name: str) -> Option | None:
         """The option called ``name``, or None."""
         return next((o for o in self.options if o.name == name), None)
 
-    def generate(self, **options: Any) -> Mesh:
+    def generate(self, **options: Any) -> Mesh | Mesh3D:
         """The mesh for the given options (the others keep their defaults).
 
         Raises
@@ -281,21 +291,24 @@ FAMILIES: Mapping[str, Family] = {
 _BY_NAME = {n: f for f in FAMILIES.values() for n in (f.name, *f.aliases)}
 
 
-def family(name: str) -> Family:
-    """The family called ``name`` (or one of its aliases).
+def family(name: str, dim: int = 2) -> Family:
+    """The family called ``name`` (or one of its aliases) among those of dimension ``dim``.
 
     Raises
     ------
     ValueError
         For an unknown name; the message suggests the closest one.
     """
-    if name not in _BY_NAME:
-        close = difflib.get_close_matches(name, list(_BY_NAME), n=1, cutoff=0.6)
+    if dim == 3:
+        from .registry3d import BY_NAME_3D as by_name
+        from .registry3d import FAMILIES_3D as fams
+    else:
+        by_name, fams = _BY_NAME, FAMILIES
+    if name not in by_name:
+        close = difflib.get_close_matches(name, list(by_name), n=1, cutoff=0.6)
         hint = f"did you mean {close[0]!r}? " if close else ""
-        raise ValueError(
-            f"{name!r} is not a known mesh family; {hint}available: {', '.join(FAMILIES)}"
-        )
-    return _BY_NAME[name]
+        raise ValueError(f"{name!r} is not a known mesh family; {hint}available: {', '.join(fams)}")
+    return by_name[name]
 
 
 # ---------------------------------------------------------------------------- a rectangle
@@ -422,7 +435,7 @@ def generate_mesh(
             raise MeshError(f"--param {key}: use the option --{key.replace('n_', '')} instead")
         kwargs[key] = value
     try:
-        mesh = fam.generate(**kwargs)
+        mesh = cast(Mesh, fam.generate(**kwargs))
     except (TypeError, ValueError) as exc:
         msg = str(exc)
         raise MeshError(

@@ -1,0 +1,240 @@
+"""Centroidal Voronoi polyhedra clipped to a box, with an exact cell count.
+
+Algorithm
+---------
+1. Seeds: ``n`` points of the Halton sequence in bases 2, 3, 5 with a random shift
+   modulo 1 (a Cranley-Patterson rotation, deterministic for a given ``seed``), scaled to
+   the box: evenly spread from the start, so that a few Lloyd iterations suffice.
+2. Clipping by mirrors: the seeds near each of the six sides are mirrored across it.
+   Inside the box no mirror is closer than the seed it mirrors, so the Voronoi cell of a
+   seed among seeds and mirrors is its cell clipped to the box, the sides cut by the
+   bisectors of the seed and its mirrors. Only seeds within a few cell sizes of a side
+   are mirrored; if then a cell is unbounded or leaves the box, all seeds are mirrored.
+3. Faces are the ridges of :class:`scipy.spatial.Voronoi` between two seeds (stored once,
+   oriented from the lower seed to the higher, sign +1 in the first cell and -1 in the
+   second) or between a seed and its own mirror (a boundary face); ridges between a seed
+   and another seed's mirror have no area and are dropped. Every loop is ordered by the
+   angle of its vertices around the vertex average, counter-clockwise about the normal.
+4. Lloyd iterations move every seed to the centroid of its cell
+   (:func:`~vemwear.mesh.geometry3d.cell_geometry`).
+5. Vertices closer than ``collapse_tol`` times the cell size are merged (the degenerate
+   Voronoi vertices that mirroring makes on the sides come out as near-copies), those on
+   sides snapped onto them, repeated vertices removed from the loops and faces left with
+   fewer than three vertices dropped.
+"""
+
+from __future__ import annotations
+
+from itertools import chain
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .generate3d import tag_box
+from .geometry3d import cell_geometry, face_geometry, loop_next, loop_owner, take_loops
+from .polyhedra import Mesh3D
+from .polymesh import MeshError
+
+__all__ = ["box_voronoi", "halton"]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+def halton(n: int, dim: int = 3, seed: int | None = 0) -> FloatArray:
+    """``n`` points of the Halton sequence in ``[0, 1)^dim``, randomly shifted modulo 1."""
+    bases = [2, 3, 5, 7, 11, 13][:dim]
+    i = np.arange(1, n + 1, dtype=np.int64)
+    out = np.zeros((n, dim))
+    for d, b in enumerate(bases):
+        k, f = i.copy(), 1.0
+        while np.any(k > 0):
+            f /= b
+            out[:, d] += f * (k % b)
+            k //= b
+    shift = np.random.default_rng(seed).random(dim) if seed is not None else np.zeros(dim)
+    return np.asarray((out + shift) % 1.0)
+
+
+def _diagram(
+    seeds: FloatArray, lo: FloatArray, hi: FloatArray, layer: float
+) -> tuple[FloatArray, IntArray, IntArray, IntArray, IntArray, NDArray[np.int8]] | None:
+    """Clipped Voronoi cells: points, face CSR and the (cell, face, sign) entries.
+
+    None if a cell of a seed is unbounded or leaves the box (too few mirrors).
+    """
+    from scipy.spatial import Voronoi
+
+    n = len(seeds)
+    pts, src = [seeds], [np.arange(n)]
+    for d in range(3):
+        for plane in (lo[d], hi[d]):
+            near = np.flatnonzero(np.abs(seeds[:, d] - plane) < layer)
+            m = seeds[near].copy()
+            m[:, d] = 2 * plane - m[:, d]
+            pts.append(m)
+            src.append(near)
+    allp, origin = np.vstack(pts), np.concatenate(src)
+    vor = Voronoi(allp)
+    rp = vor.ridge_points
+    a, b = np.minimum(rp[:, 0], rp[:, 1]), np.maximum(rp[:, 0], rp[:, 1])
+    inner = b < n
+    bound = (a < n) & (b >= n) & (origin[b] == a)
+    keep = np.flatnonzero(inner | bound)
+    sizes = np.fromiter(map(len, vor.ridge_vertices), dtype=np.int64, count=len(rp))
+    flat = np.fromiter(chain.from_iterable(vor.ridge_vertices), dtype=np.int64)
+    roff = np.zeros(len(rp) + 1, dtype=np.int64)
+    np.cumsum(sizes, out=roff[1:])
+    foff, fv = take_loops(roff, flat, keep)
+    if np.any(fv < 0):
+        return None
+    tol = 1e-9 * float(np.max(hi - lo))
+    P = vor.vertices
+    used = np.unique(fv)
+    if np.any(P[used] < lo - tol) or np.any(P[used] > hi + tol):
+        return None
+    remap = np.full(len(P), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    P, fv = P[used], remap[fv]
+    # order every loop counter-clockwise about the direction from seed a to seed b
+    normal = allp[b[keep]] - allp[a[keep]]
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    axis = np.eye(3)[np.argmin(np.abs(normal), axis=1)]
+    u = np.cross(normal, axis)
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    w = np.cross(normal, u)
+    owner = loop_owner(foff)
+    _A, _c, avg = face_geometry(P, foff, fv)
+    r = P[fv] - avg[owner]
+    angle = np.arctan2(np.einsum("ij,ij->i", r, w[owner]), np.einsum("ij,ij->i", r, u[owner]))
+    fv = fv[np.lexsort((angle, owner))]
+    fa, fb, inside = a[keep], b[keep], inner[keep]
+    nf = len(keep)
+    cells = np.concatenate([fa, fb[inside]])
+    faces = np.concatenate([np.arange(nf), np.flatnonzero(inside)])
+    signs = np.concatenate([np.ones(nf, np.int8), -np.ones(int(inside.sum()), np.int8)])
+    order = np.argsort(cells, kind="stable")
+    coff = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(cells, minlength=n), out=coff[1:])
+    return P, foff, fv, coff, faces[order], signs[order]
+
+
+def _clipped(seeds: FloatArray, lo: FloatArray, hi: FloatArray, h: float):
+    out = _diagram(seeds, lo, hi, 3.0 * h)
+    return out if out is not None else _diagram(seeds, lo, hi, np.inf)
+
+
+def _merge(
+    P: FloatArray, foff: IntArray, fv: IntArray, lo: FloatArray, hi: FloatArray, tol: float
+) -> tuple[FloatArray, IntArray, IntArray, NDArray[np.bool_]]:
+    """Merge close vertices, snap to the sides; the faces kept (>= 3 vertices)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(P).query_pairs(tol, output_type="ndarray")
+    n = len(P)
+    g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    nc, comp = connected_components(g, directed=False)
+    cnt = np.bincount(comp, minlength=nc).astype(float)
+    Q = np.column_stack(
+        [np.bincount(comp, weights=P[:, d], minlength=nc) for d in range(3)]
+    ).astype(np.float64)
+    Q /= cnt[:, None]
+    snap = 1e-9 * float(np.max(hi - lo)) + tol
+    for d in range(3):
+        on_lo = np.zeros(nc, dtype=bool)
+        on_hi = np.zeros(nc, dtype=bool)
+        np.logical_or.at(on_lo, comp, np.abs(P[:, d] - lo[d]) <= snap)
+        np.logical_or.at(on_hi, comp, np.abs(P[:, d] - hi[d]) <= snap)
+        Q[on_lo, d], Q[on_hi, d] = lo[d], hi[d]
+    fv = comp[fv]
+    keep_entry = fv != fv[loop_next(foff)]
+    owner = loop_owner(foff)
+    sizes = np.bincount(owner[keep_entry], minlength=len(foff) - 1)
+    fv = fv[keep_entry]
+    kept = sizes >= 3
+    off = np.zeros(len(sizes) + 1, dtype=np.int64)
+    np.cumsum(sizes, out=off[1:])
+    off, fv = take_loops(off, fv, np.flatnonzero(kept))
+    used = np.unique(fv)
+    remap = np.full(nc, -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    return Q[used], off, remap[fv], kept
+
+
+def box_voronoi(
+    size: tuple[float, float, float] = (2.0, 1.0, 1.0),
+    n_cells: int = 256,
+    seed: int | None = 0,
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    *,
+    seeds: ArrayLike | None = None,
+    lloyd_iterations: int = 4,
+    collapse_tol: float = 1e-9,
+) -> Mesh3D:
+    """Centroidal Voronoi polyhedra of a box, exactly ``n_cells`` of them, sides tagged.
+
+    Parameters
+    ----------
+    size : (float, float, float)
+        Side lengths ``(lx, ly, lz)``.
+    n_cells : int
+        Number of cells.
+    seed : int or None
+        Seed of the random shift of the Halton points (None: no shift).
+    origin : (float, float, float)
+        The corner with the smallest coordinates.
+    seeds : (n, 3) array, optional
+        The seeds instead of Halton points (``n_cells`` and ``seed`` are ignored);
+        distinct and strictly inside the box.
+    lloyd_iterations : int
+        Lloyd iterations (moving the seeds to their cells' centroids).
+    collapse_tol : float
+        Merge vertices closer than this times the cell size ``(|box| / n)^(1/3)``.
+
+    Returns
+    -------
+    Mesh3D
+        Cell ``k`` is the cell of seed ``k``; the six sides are the parts
+        ``xmin`` ... ``zmax``.
+    """
+    if len(size) != 3 or len(origin) != 3:
+        raise ValueError("size and origin need three entries each")
+    lo = np.asarray(origin, dtype=float)
+    ext = np.asarray(size, dtype=float)
+    if not np.all(ext > 0):
+        raise ValueError(f"size must be positive, got {list(size)}")
+    hi = lo + ext
+    if seeds is not None:
+        X = np.asarray(seeds, dtype=float)
+        if X.ndim != 2 or X.shape[1] != 3 or len(X) < 1:
+            raise ValueError("seeds must be an (n, 3) array")
+        if np.any(X <= lo) or np.any(X >= hi):
+            raise ValueError("seeds must lie strictly inside the box")
+    else:
+        if int(n_cells) < 1:
+            raise ValueError(f"n_cells must be >= 1, got {n_cells}")
+        X = lo + ext * halton(int(n_cells), 3, seed)
+        X = np.clip(X, lo + 1e-6 * ext, hi - 1e-6 * ext)
+    if int(lloyd_iterations) < 0 or not collapse_tol >= 0:
+        raise ValueError("lloyd_iterations and collapse_tol must be >= 0")
+    n = len(X)
+    if n < 2:  # Qhull needs points in general position: one cell is the box
+        raise ValueError("box_voronoi needs at least 2 cells (one cell: use box_hexahedra)")
+    h = float(np.prod(ext) / n) ** (1 / 3)
+    for _ in range(int(lloyd_iterations)):
+        P, foff, fv, coff, cf, cs = _clipped(X, lo, hi, h)
+        ent = np.repeat(np.arange(n), np.diff(coff))
+        _, X = cell_geometry(P, foff, fv, ent, cf, cs, n)
+    P, foff, fv, coff, cf, cs = _clipped(X, lo, hi, h)
+    P, foff, fv, kept = _merge(P, foff, fv, lo, hi, collapse_tol * h)
+    new_id = np.cumsum(kept) - 1
+    ent = np.repeat(np.arange(n), np.diff(coff))
+    ok = kept[cf]
+    coff = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(ent[ok], minlength=n), out=coff[1:])
+    mesh = Mesh3D(P, foff, fv, coff, new_id[cf[ok]], cs[ok])
+    if mesh.n_cells != n:  # pragma: no cover - every seed has a cell
+        raise MeshError(f"box_voronoi made {mesh.n_cells} cells instead of {n}")
+    return tag_box(mesh)
