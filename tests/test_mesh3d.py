@@ -28,8 +28,7 @@ from vemwear.mesh.generate3d import (
 from vemwear.mesh.io3d import read_mesh3d, write_mesh3d
 from vemwear.mesh.polyhedra import Mesh3D
 from vemwear.mesh.quality3d import quality_report3d
-from vemwear.mesh.registry import family
-from vemwear.mesh.registry3d import FAMILIES_3D, generate_mesh3d
+from vemwear.mesh.registry3d import FAMILIES_3D, family3d, generate_mesh3d
 from vemwear.mesh.voronoi3d import box_voronoi
 
 SIZE = (2.0, 1.0, 1.0)
@@ -393,9 +392,9 @@ def test_read_errors(tmp_path: Path) -> None:
 # ----------------------------------------------------------------------------- registry
 def test_registry_3d_families() -> None:
     assert set(FAMILIES_3D) == {"hexahedra", "tetrahedra", "prisms", "voronoi3d"}
-    assert family("box_voronoi", dim=3).name == "voronoi3d"
+    assert family3d("box_voronoi").name == "voronoi3d"
     with pytest.raises(ValueError, match="did you mean 'hexahedra'"):
-        family("hexahedron", dim=3)
+        family3d("hexahedron")
     hexa = generate_mesh3d("hexahedra", cells=32)
     assert hexa.n_cells == 32 and quality_report3d(hexa).edge_ratio.min() > 0.3
     tets = generate_mesh3d("tetrahedra", divisions=(2, 1, 1))

@@ -12,7 +12,7 @@ fixed-size arrays, ``Literal`` for choices); values are checked by the generator
 rectangle (the work behind ``vemwear mesh generate``).
 
 The 3D families (meshes of a box, :class:`Mesh3D`) are registered apart, in
-:data:`vemwear.mesh.registry3d.FAMILIES_3D` (``family(name, dim=3)`` finds them); the
+:data:`vemwear.mesh.registry3d.FAMILIES_3D` (``registry3d.family3d`` finds them); the
 configuration schema and the command line know the 2D families only so far.
 """
 
@@ -23,13 +23,12 @@ import inspect
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal, cast
+from typing import Any, Generic, Literal, TypeVar
 
 from numpy.typing import ArrayLike
 
 from .families import distorted_quads, hexagons, nonconvex_mesh, squares_with_hanging_nodes
 from .generate import rectangle_squares, rectangle_triangles
-from .polyhedra import Mesh3D
 from .polymesh import Mesh, MeshError
 from .voronoi import rectangle_domain, voronoi_from_seeds, voronoi_mesh
 
@@ -64,8 +63,12 @@ class Option:
     replaces: tuple[str, ...] = ()
 
 
+#: The mesh type a family makes (:class:`Mesh` in 2D, :class:`~vemwear.mesh.polyhedra.Mesh3D`).
+M = TypeVar("M")
+
+
 @dataclass(frozen=True)
-class Family:
+class Family(Generic[M]):
     """A mesh family: its generator and the options it takes.
 
     Attributes
@@ -88,7 +91,7 @@ class Family:
     """
 
     name: str
-    function: Callable[..., Mesh | Mesh3D]
+    function: Callable[..., M]
     description: str
     options: tuple[Option, ...]
     aliases: tuple[str, ...] = ()
@@ -112,7 +115,7 @@ class Family:
         """The option called ``name``, or None."""
         return next((o for o in self.options if o.name == name), None)
 
-    def generate(self, **options: Any) -> Mesh | Mesh3D:
+    def generate(self, **options: Any) -> M:
         """The mesh for the given options (the others keep their defaults).
 
         Raises
@@ -199,7 +202,7 @@ _VORONOI = _options(
 )
 
 #: The mesh families by name.
-FAMILIES: Mapping[str, Family] = {
+FAMILIES: Mapping[str, Family[Mesh]] = {
     f.name: f
     for f in (
         Family(
@@ -291,23 +294,26 @@ FAMILIES: Mapping[str, Family] = {
 _BY_NAME = {n: f for f in FAMILIES.values() for n in (f.name, *f.aliases)}
 
 
-def family(name: str, dim: int = 2) -> Family:
-    """The family called ``name`` (or one of its aliases) among those of dimension ``dim``.
+def family(name: str) -> Family[Mesh]:
+    """The family called ``name`` (or one of its aliases).
 
     Raises
     ------
     ValueError
         For an unknown name; the message suggests the closest one.
     """
-    if dim == 3:
-        from .registry3d import BY_NAME_3D as by_name
-        from .registry3d import FAMILIES_3D as fams
-    else:
-        by_name, fams = _BY_NAME, FAMILIES
+    return lookup(name, _BY_NAME, FAMILIES)
+
+
+def lookup(name: str, by_name: Mapping[str, Family[M]], families: Mapping[str, Any]) -> Family[M]:
+    """The family called ``name`` in ``by_name`` (names and aliases), or a ValueError that
+    suggests the closest name and lists ``families``."""
     if name not in by_name:
         close = difflib.get_close_matches(name, list(by_name), n=1, cutoff=0.6)
         hint = f"did you mean {close[0]!r}? " if close else ""
-        raise ValueError(f"{name!r} is not a known mesh family; {hint}available: {', '.join(fams)}")
+        raise ValueError(
+            f"{name!r} is not a known mesh family; {hint}available: {', '.join(families)}"
+        )
     return by_name[name]
 
 
@@ -435,7 +441,7 @@ def generate_mesh(
             raise MeshError(f"--param {key}: use the option --{key.replace('n_', '')} instead")
         kwargs[key] = value
     try:
-        mesh = cast(Mesh, fam.generate(**kwargs))
+        mesh = fam.generate(**kwargs)
     except (TypeError, ValueError) as exc:
         msg = str(exc)
         raise MeshError(

@@ -20,16 +20,14 @@ import numpy as np
 from .generate3d import BOX_SIDES, box_hexahedra, box_tetrahedra, extrude, tag_box
 from .polyhedra import Mesh3D
 from .polymesh import PARTS, Mesh, MeshError, part_names_with
-from .registry import _SEED, FAMILIES, Family, _options, family, generate_mesh
+from .registry import _SEED, FAMILIES, Family, _options, generate_mesh, lookup
 from .voronoi3d import box_voronoi
 
-__all__ = ["FAMILIES_3D", "box_prisms", "generate_mesh3d"]
+__all__ = ["FAMILIES_3D", "box_prisms", "family3d", "generate_mesh3d"]
 
 Triple = tuple[float, float, float]
 Counts3 = tuple[int, int, int]
 Points3 = tuple[Triple, ...]
-
-_family = family  # for the functions whose argument is called family
 
 
 def box_prisms(
@@ -75,7 +73,7 @@ _GRID3 = {
 }
 
 #: The 3D mesh families (of a box) by name.
-FAMILIES_3D: Mapping[str, Family] = {
+FAMILIES_3D: Mapping[str, Family[Mesh3D]] = {
     f.name: f
     for f in (
         Family(
@@ -136,6 +134,12 @@ FAMILIES_3D: Mapping[str, Family] = {
     )
 }
 BY_NAME_3D = {n: f for f in FAMILIES_3D.values() for n in (f.name, *f.aliases)}
+
+
+def family3d(name: str) -> Family[Mesh3D]:
+    """The 3D family called ``name`` (or one of its aliases); a ValueError suggests the
+    closest name."""
+    return lookup(name, BY_NAME_3D, FAMILIES_3D)
 
 
 # ---------------------------------------------------------------------------- a box
@@ -203,7 +207,7 @@ def generate_mesh3d(
         rejects its arguments.
     """
     try:
-        fam = _family(family, dim=3)
+        fam = family3d(family)
     except ValueError as exc:
         raise MeshError(str(exc)) from None
     takes = {o.name for o in fam.options}
@@ -233,5 +237,4 @@ def generate_mesh3d(
         mesh = fam.generate(**kwargs)
     except (TypeError, ValueError) as exc:
         raise MeshError(f"family {fam.name!r}: {exc}") from exc
-    assert isinstance(mesh, Mesh3D)
     return mesh
