@@ -1,6 +1,7 @@
 """The contact part: nodal quadrature on Gamma_C, compliance laws, coefficients, v*(t)."""
 
 from .boundary import ContactBoundary, arc_length, contact_boundary
+from .boundary3d import contact_boundary3d, velocity_line
 from .data import FoundationVelocity, NodalField, nodal_values, table_values
 from .law import (
     CallableCompliance,
@@ -26,8 +27,10 @@ __all__ = [
     "as_law",
     "check_law",
     "contact_boundary",
+    "contact_boundary3d",
     "nodal_values",
     "table_values",
     "tangential_velocity",
     "velocity_levels",
+    "velocity_line",
 ]

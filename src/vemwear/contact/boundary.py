@@ -35,12 +35,14 @@ class ContactBoundary:
     Attributes
     ----------
     nodes : (m,) vertex ids, ordered along each chain of contact edges; for k = 2 an
-        edge midpoint is ``n_points + e``, ``e`` the row of :attr:`Mesh.edges`
-    points : (m, 2) their coordinates
-    s : (m,) arc length from the start of the node's chain
+        edge midpoint is ``n_points + e``, ``e`` the row of :attr:`Mesh.edges`; in 3D
+        sorted by vertex id within each part (:mod:`vemwear.contact.boundary3d`)
+    points : (m, d) their coordinates
+    s : (m,) arc length from the start of the node's chain (3D: the x coordinate)
     weights : (m,) omega_a
-    normals, tangents : (m, 2) unit nu_a and tau_a
-    n_dof : number of global dofs (2 * n_points)
+    normals, tangents : (m, d) unit nu_a and tau_a; in 3D tau_a is the tangential
+        direction of the foundation velocity's line at the node (the friction row)
+    n_dof : number of global dofs (d * n_points)
     part : (m,) index of the node's contact part in ``part_names``
     part_names : the contact parts, in order
     trace : (2 m, n_dof) sparse, optional
@@ -67,13 +69,21 @@ class ContactBoundary:
     def m(self) -> int:
         return len(self.nodes)
 
+    @property
+    def dim(self) -> int:
+        """The dimension d (2 or 3) of the points and directions."""
+        return int(self.normals.shape[1])
+
     def _component_operator(self, direction: NDArray[np.float64]) -> sp.csr_matrix:
+        d = self.dim
         if self.trace is not None:
             T = self.trace
-            op = sp.diags(direction[:, 0]) @ T[0::2] + sp.diags(direction[:, 1]) @ T[1::2]
+            op = sp.diags(direction[:, 0]) @ T[0::d] + sp.diags(direction[:, 1]) @ T[1::d]
+            for c in range(2, d):
+                op = op + sp.diags(direction[:, c]) @ T[c::d]
             return sp.csr_matrix(op)
-        rows = np.repeat(np.arange(self.m), 2)
-        cols = np.column_stack([2 * self.nodes, 2 * self.nodes + 1]).ravel()
+        rows = np.repeat(np.arange(self.m), d)
+        cols = (d * self.nodes[:, None] + np.arange(d)).ravel()
         return sp.csr_matrix((direction.ravel(), (rows, cols)), shape=(self.m, self.n_dof))
 
     @property

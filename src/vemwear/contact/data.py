@@ -66,13 +66,13 @@ def table_values(
         The coefficient, for messages.
     """
     along = spec.get("along", "x")
-    if along not in ("x", "y", "s"):
-        raise ValueError(f"{name}: 'along' must be 'x', 'y' or 's', got {along!r}")
+    if along not in ("x", "y", "z", "s") or (along == "z" and np.shape(points)[1] < 3):
+        raise ValueError(f"{name}: 'along' must be 'x', 'y' or 's' (3D: 'z'), got {along!r}")
     at = np.asarray(spec["at"], dtype=float)
     vals = np.asarray(spec["values"], dtype=float)
     if at.ndim != 1 or at.shape != vals.shape or at.size < 1 or np.any(np.diff(at) <= 0):
         raise ValueError(f"{name}: 'at' must increase strictly and match 'values' in length")
-    coord = arc() if along == "s" else np.asarray(points, dtype=float)[:, "xy".index(along)]
+    coord = arc() if along == "s" else np.asarray(points, dtype=float)[:, "xyz".index(along)]
     return np.interp(coord, at, vals)
 
 
@@ -89,18 +89,18 @@ class FoundationVelocity:
         elif isinstance(s, Mapping):
             ts = np.asarray(s["t"], dtype=float)
             vals = np.asarray(s["values"], dtype=float)
-            v = np.array([np.interp(t, ts, vals[:, 0]), np.interp(t, ts, vals[:, 1])])
+            v = np.array([np.interp(t, ts, vals[:, c]) for c in range(vals.shape[1])])
         else:
             v = np.asarray(s, dtype=float)
-        if v.shape != (2,) or not np.all(np.isfinite(v)):
-            raise ValueError(f"v_star({t:g}) must be a finite 2-vector, got {v!r}")
+        if v.shape not in ((2,), (3,)) or not np.all(np.isfinite(v)):
+            raise ValueError(f"v_star({t:g}) must be a finite 2- or 3-vector, got {v!r}")
         return v
 
     def n_star(self, t: float) -> NDArray[np.float64]:
         """``-v*/|v*|``, or zero where the foundation stands still."""
         v = self(t)
         nv = float(np.linalg.norm(v))
-        return -v / nv if nv > 0.0 else np.zeros(2)
+        return -v / nv if nv > 0.0 else np.zeros(len(v))
 
     def speed(self, t: float) -> float:
         return float(np.linalg.norm(self(t)))

@@ -108,26 +108,36 @@ def tangential_velocity(
     in 2D; its sign gives the friction direction ``n* = -v*_tau / |v*_tau|`` and its
     length the wear rate ``alpha = kappa |v*_tau|`` (docs/method.md, section 3b).
     """
-    V = np.array([pc.velocity(t) for pc in parts])  # (n_parts, 2)
+    V = np.array([pc.velocity(t) for pc in parts])  # (n_parts, d)
     v = V[part]
-    return np.asarray(v[:, 0] * tangents[:, 0] + v[:, 1] * tangents[:, 1], dtype=np.float64)
+    if tangents.shape[1] != v.shape[1]:
+        raise ValueError(
+            f"v_star has {v.shape[1]} components, the contact tangents {tangents.shape[1]}"
+        )
+    out = v[:, 0] * tangents[:, 0] + v[:, 1] * tangents[:, 1]
+    if tangents.shape[1] == 3:  # 3D: tau_a is the line of v*_tau (contact.boundary3d)
+        out = out + v[:, 2] * tangents[:, 2]
+    return np.asarray(out, dtype=np.float64)
 
 
 def velocity_levels(v: FoundationVelocity, t: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``v*(t_n)`` at many times at once, (len(t), 2), not checked for being finite.
+    """``v*(t_n)`` at many times at once, (len(t), d), not checked for being finite.
 
     Numbers and tables of t are evaluated in one go, as is a callable with a method
     ``at_times(t)`` (the expressions of a configuration file); any other callable one
     time at a time.
     """
     ts = np.asarray(t, dtype=float).ravel()
+    if ts.size == 0:
+        return np.zeros((0, len(v(0.0))))
     s = v.spec
     if callable(s):
         many = getattr(s, "at_times", None)
         if many is not None:
-            return np.asarray(many(ts), dtype=float).reshape(len(ts), 2)
-        return np.array([np.asarray(s(x), dtype=float) for x in ts]).reshape(len(ts), 2)
+            return np.asarray(many(ts), dtype=float).reshape(len(ts), -1)
+        return np.array([np.asarray(s(x), dtype=float) for x in ts]).reshape(len(ts), -1)
     if isinstance(s, Mapping):
         at, vals = np.asarray(s["t"], dtype=float), np.asarray(s["values"], dtype=float)
-        return np.column_stack([np.interp(ts, at, vals[:, 0]), np.interp(ts, at, vals[:, 1])])
-    return np.broadcast_to(np.asarray(s, dtype=float).reshape(2), (len(ts), 2)).copy()
+        return np.column_stack([np.interp(ts, at, vals[:, c]) for c in range(vals.shape[1])])
+    c = np.asarray(s, dtype=float).ravel()
+    return np.broadcast_to(c, (len(ts), len(c))).copy()

@@ -26,8 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..mesh.polyhedra import Mesh3D
 from ..mesh.polymesh import Mesh
-from ..vem.space import P1Space, Space
+from ..vem.space import P1Space, Space, has_part, make_space, part_facets
 
 __all__ = ["Component", "Constraints", "Prescribed"]
 
@@ -46,21 +47,32 @@ class Prescribed:
         The boundary part.
     ux, uy : float, callable or None
         The prescribed ``u_x`` and ``u_y`` (None: that component is traction-free).
+    uz : float, callable or None
+        The prescribed ``u_z`` on a 3D mesh (callables get (n, 3) points).
     """
 
     part: str
     ux: Component = None
     uy: Component = None
+    uz: Component = None
 
     def __post_init__(self) -> None:
-        if self.ux is None and self.uy is None:
+        if self.ux is None and self.uy is None and self.uz is None:
             raise ValueError(f"displacement on {self.part!r}: give ux, uy or both")
+
+    @property
+    def components(self) -> tuple[Component, Component, Component]:
+        """``(ux, uy, uz)``."""
+        return (self.ux, self.uy, self.uz)
 
     def describe(self) -> dict[str, object]:
         def desc(c: Component) -> object:
             return getattr(c, "__name__", "callable") if callable(c) else c
 
-        return {"part": self.part, "ux": desc(self.ux), "uy": desc(self.uy)}
+        out = {"part": self.part, "ux": desc(self.ux), "uy": desc(self.uy)}
+        if self.uz is not None:  # 2D descriptions (and fingerprints) stay as they were
+            out["uz"] = desc(self.uz)
+        return out
 
 
 class Constraints:
@@ -79,44 +91,52 @@ class Constraints:
 
     def __init__(
         self,
-        mesh: Mesh,
+        mesh: Mesh | Mesh3D,
         clamped: Sequence[str],
         prescribed: Sequence[Prescribed],
         space: Space | None = None,
     ) -> None:
-        self.space: Space = P1Space(mesh) if space is None else space
+        if space is None:
+            space = make_space(mesh) if isinstance(mesh, Mesh3D) else P1Space(mesh)
+        self.space: Space = space
         sp_ = self.space
         n = sp_.n_dofs
-        clamped = tuple(c for c in clamped if mesh.has_part(c))
+        #: the dimension d: dof i is component i % d (of a vertex, an edge or a cell)
+        self.dim = d = int(sp_.dim)
+        comps = [(p.ux, p.uy, p.uz)[:d] for p in prescribed]
+        for p in prescribed:
+            if d == 2 and p.uz is not None:
+                raise ValueError(f"displacement on {p.part!r}: uz is for 3D meshes only")
+        clamped = tuple(c for c in clamped if has_part(mesh, c))
         #: the constraining parts: the clamped ones, then the prescribed ones
         self.parts = (*clamped, *(p.part for p in prescribed))
         self.n_clamped = len(clamped)
         owner = -np.ones(n, dtype=np.int64)  # -1 free, else the index in self.parts
         for i, name in enumerate(clamped):
-            for d in sp_.component_dofs(mesh.part_edges(name)):
-                owner[d[owner[d] < 0]] = i
+            for dd in sp_.component_dofs(part_facets(mesh, name)):
+                owner[dd[owner[dd] < 0]] = i
         for i, pr in enumerate(prescribed):
-            comp = sp_.component_dofs(mesh.part_edges(pr.part))
-            for d, spec in zip(comp, (pr.ux, pr.uy), strict=True):
+            comp = sp_.component_dofs(part_facets(mesh, pr.part))
+            for dd, spec in zip(comp, comps[i], strict=True):
                 if spec is not None:
-                    owner[d[owner[d] < 0]] = self.n_clamped + i
+                    owner[dd[owner[dd] < 0]] = self.n_clamped + i
         self.mesh = mesh
         self.prescribed = tuple(prescribed)
         self.dofs = np.flatnonzero(owner >= 0)
         self.owner = owner[self.dofs]
         self.free = np.flatnonzero(owner < 0)
         self.mask = owner >= 0
-        self.time_dependent = any(callable(c) for p in prescribed for c in (p.ux, p.uy))
+        self._components = comps
+        self.time_dependent = any(callable(c) for cs in comps for c in cs)
         self.zero = all(
-            not callable(c) and (c is None or float(c) == 0.0)
-            for p in prescribed
-            for c in (p.ux, p.uy)
+            not callable(c) and (c is None or float(c) == 0.0) for cs in comps for c in cs
         )
 
     @property
     def fully_fixed_vertices(self) -> NDArray[np.bool_]:
-        """Vertices with both components constrained (they are no contact nodes)."""
-        return np.asarray(self.mask[: 2 * self.mesh.n_points].reshape(-1, 2).all(axis=1))
+        """Vertices with all components constrained (they are no contact nodes)."""
+        d = self.dim
+        return np.asarray(self.mask[: d * self.mesh.n_points].reshape(-1, d).all(axis=1))
 
     def values(self, t: float) -> NDArray[np.float64]:
         """The prescribed values at the constrained dofs (``self.dofs``) at time ``t``."""
@@ -124,14 +144,14 @@ class Constraints:
         if self.zero:
             return out
         for i, pr in enumerate(self.prescribed):
-            for c, spec in enumerate((pr.ux, pr.uy)):
-                sel = (self.owner == self.n_clamped + i) & (self.dofs % 2 == c)
+            for c, spec in enumerate(self._components[i]):
+                sel = (self.owner == self.n_clamped + i) & (self.dofs % self.dim == c)
                 if spec is None or not np.any(sel):
                     continue
                 if callable(spec):
                     val = self.space.component_values(self.dofs[sel], spec, t)
                     if not np.all(np.isfinite(val)):
-                        name = "ux" if c == 0 else "uy"
+                        name = ("ux", "uy", "uz")[c]
                         raise ValueError(
                             f"displacement on {pr.part!r}: {name} is not finite at t = {t:g}"
                         )
@@ -142,7 +162,10 @@ class Constraints:
 
     def free_rigid_motions(self) -> list[str]:
         """The rigid motions the constraints leave free, described in words (empty if
-        none): translations in x and y and rotations about a point."""
+        none): translations in x and y and rotations about a point (3D: the six rigid
+        motions, translations along and rotations about axes)."""
+        if self.dim == 3:
+            return self._free_rigid_motions3d()
         P = self.mesh.points
         centre = P.mean(axis=0)
         L = float(np.ptp(P, axis=0).max()) or 1.0
@@ -168,6 +191,28 @@ class Constraints:
             )
         return [_motion(null[0], centre, L)]
 
+    def _free_rigid_motions3d(self) -> list[str]:
+        """The free rigid motions in 3D: the null space of the six rigid motions
+        (three translations, three rotations about the centre) at the constrained dofs."""
+        P = self.mesh.points
+        centre = P.mean(axis=0)
+        L = float(np.ptp(P, axis=0).max()) or 1.0
+        X, c = (self.space.dof_points[self.dofs] - centre) / L, self.dofs % 3
+        A = np.zeros((len(self.dofs), 6))
+        A[np.arange(len(c)), c] = 1.0
+        for k in range(3):  # rotation about axis k: e_k x (x - centre)
+            rot = np.cross(np.eye(3)[k], X)
+            A[:, 3 + k] = rot[np.arange(len(c)), c]
+        if len(A) == 0:
+            return ["the three translations and the three rotations"]
+        _, sv, Vt = np.linalg.svd(A, full_matrices=True)
+        rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0)), 1e-300)))
+        if rank == 6:
+            return []
+        if rank == 0:
+            return ["the three translations and the three rotations"]
+        return [_motion3d(n, centre, L) for n in Vt[rank:]]
+
 
 def _motion(n: NDArray[np.float64], centre: NDArray[np.float64], L: float) -> str:
     a, b, c = (float(x) for x in n / np.abs(n).max())
@@ -179,3 +224,17 @@ def _motion(n: NDArray[np.float64], centre: NDArray[np.float64], L: float) -> st
         return f"the translation along ({a:.3g}, {b:.3g})"
     x0, y0 = centre[0] - b * L / c, centre[1] + a * L / c
     return f"the rotation about ({x0:.4g}, {y0:.4g})"
+
+
+def _motion3d(n: NDArray[np.float64], centre: NDArray[np.float64], L: float) -> str:
+    t, r = n[:3], n[3:]
+    if np.linalg.norm(r) < 1e-9 * np.linalg.norm(n):
+        a, b, c = (float(x) + 0.0 for x in t / t[np.argmax(np.abs(t))])
+        return f"the translation along ({a:.3g}, {b:.3g}, {c:.3g})"
+    # u = t + r x (x - centre) / L: the axis r through the point where u is along r
+    p = centre + L * np.cross(r, t) / float(r @ r)
+    a, b, c = (float(x) + 0.0 for x in r / r[np.argmax(np.abs(r))])
+    return (
+        f"the rotation about the axis ({a:.3g}, {b:.3g}, {c:.3g}) through "
+        f"({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g})"
+    )

@@ -80,12 +80,14 @@ class Discretization:
         # the lifting of prescribed values, K_fc u_c(t) (none if all are zero)
         self.K_fc = None if con.zero else self.K_full[self.free][:, con.dofs].tocsr()
         trace = None
-        if cb.trace is None:  # k = 1: the two dofs of each contact vertex
+        #: the dimension d: dof i of the vertex values is component i % d
+        self.dim = dim = int(space.dim)
+        if cb.trace is None:  # k = 1: the d dofs of each contact vertex
             index = -np.ones(self.n_dof, dtype=np.int64)
             index[self.free] = np.arange(len(self.free))
-            cdofs = index[np.column_stack([2 * cb.nodes, 2 * cb.nodes + 1])]
+            cdofs = index[dim * cb.nodes[:, None] + np.arange(dim)]
             self.offset = self._contact_offset(cdofs)
-            dof_points = mesh.points[self.free // 2]
+            dof_points = mesh.points[self.free // dim]
         else:  # the trace operator on the free dofs; prescribed dofs give the offset
             cdofs = None
             trace = sp.csr_matrix(cb.trace[:, self.free])
@@ -130,9 +132,10 @@ class Discretization:
         def at(time: float) -> NDArray[np.float64]:
             u = con.values(time)
             o = np.zeros(cb.m)
-            for c in (0, 1):
+            d = self.dim
+            for c in range(d):
                 fixed = cdofs[:, c] < 0
-                o[fixed] += cb.normals[fixed, c] * u[pos[2 * cb.nodes[fixed] + c]]
+                o[fixed] += cb.normals[fixed, c] * u[pos[d * cb.nodes[fixed] + c]]
             return o
 
         off = at(float(t[0]))
@@ -226,7 +229,7 @@ class Discretization:
         return (*((n, "contact") for n in cb.part_names), *((n, "reaction") for n in con.parts))
 
     def resultants(self, step: StepData, solution: StepSolution, solver: Any) -> NDArray:
-        """(P, 2) force resultants on the body at a level (rows :attr:`force_parts`):
+        """(P, d) force resultants on the body at a level (rows :attr:`force_parts`):
         the force of each contact part's layer, ``-sum_a omega_a [(p_soft + p_rigid)
         nu_a + fric_a p_soft tau_a]``, and the reaction of each clamped or prescribed
         part, ``(K u - f_h)`` summed over its constrained dofs (the contact forces on
@@ -238,11 +241,11 @@ class Discretization:
         normal = cb.weights * (p_soft + p_rigid)
         tangent = cb.weights * step.fric * p_soft
         node_force = -(normal[:, None] * cb.normals + tangent[:, None] * cb.tangents)
-        out = np.zeros((len(cb.part_names) + len(con.parts), 2))
+        out = np.zeros((len(cb.part_names) + len(con.parts), self.dim))
         if len(cb.part_names) == 1:
             out[0] = node_force.sum(axis=0)
         else:
-            for c in (0, 1):
+            for c in range(self.dim):
                 out[: len(cb.part_names), c] = np.bincount(
                     cb.part, node_force[:, c], minlength=len(cb.part_names)
                 )
@@ -256,7 +259,7 @@ class Discretization:
             static = self._K_cc @ con.values(step.t) - self._F_ext_c(step.t)
             op.static = static
         reaction = op.ZF - op.ZN @ normal - op.ZT @ tangent + op.ET @ (op.static + r_c)
-        out[len(cb.part_names) :] = reaction.reshape(-1, 2)
+        out[len(cb.part_names) :] = reaction.reshape(-1, self.dim)
         return out
 
     def _reaction_operators(self, solver: Any) -> _Reactions:
@@ -264,10 +267,11 @@ class Discretization:
         contact operators, so that a level costs O(m) besides ``Z^T F`` per load."""
         if self._reaction is None:
             con, cb, s = self.constraints, self.contact, self.system
-            cols = con.owner * 2 + con.dofs % 2  # (part, component) of each constrained dof
+            d = self.dim
+            cols = con.owner * d + con.dofs % d  # (part, component) of each constrained dof
             E = sp.csr_matrix(
                 (np.ones(len(con.dofs)), (np.arange(len(con.dofs)), cols)),
-                shape=(len(con.dofs), 2 * len(con.parts)),
+                shape=(len(con.dofs), d * len(con.parts)),
             )
             Kfc = self.K_full[self.free][:, con.dofs].tocsr()
             B = np.asarray((Kfc @ E).todense())
@@ -326,7 +330,7 @@ class Discretization:
     def full_displacement(
         self, u_free: NDArray[np.float64], t: float | None = None
     ) -> NDArray[np.float64]:
-        """(n_points, 2) displacement at the vertices (the vertex dofs of
+        """(n_points, d) displacement at the vertices (the vertex dofs of
         :meth:`full_dofs`; all dofs for k = 1)."""
         return self.space.vertex_values(self.full_dofs(u_free, t))
 

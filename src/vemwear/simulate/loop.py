@@ -257,7 +257,7 @@ class MemorySink:
             problem=problem,
             t=np.array(problem.time.t[plan.levels]),
             points=problem.mesh.points.copy(),
-            u=np.zeros((len(plan.u_levels), nv, 2)),
+            u=np.zeros((len(plan.u_levels), nv, d.dim)),
             contact_nodes=d.contact.nodes.copy(),
             contact_s=d.contact.s.copy(),
             contact_points=d.contact.points.copy(),
@@ -271,7 +271,7 @@ class MemorySink:
             solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
             completed=0,
             levels=plan.levels.copy(),
-            forces=np.zeros((K, len(d.force_parts), 2)),
+            forces=np.zeros((K, len(d.force_parts), d.dim)),
             dofs=np.zeros((len(plan.u_levels), d.n_dof)) if problem.order > 1 else None,
         )
 

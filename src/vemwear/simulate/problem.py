@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any, Generic, TypeVar, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,14 +27,19 @@ from ..contact import (
     NodalLaw,
     check_law,
     contact_boundary,
+    contact_boundary3d,
     nodal_values,
+    velocity_levels,
+    velocity_line,
 )
 from ..mesh.checks import check_mesh
+from ..mesh.checks3d import check_mesh3d
+from ..mesh.polyhedra import Mesh3D
 from ..mesh.polymesh import Mesh, MeshError
 from ..util.hashing import sha256_arrays
 from ..vem import Material
 from ..vem.assembly import Field
-from ..vem.space import ORDERS, P1Space, P2Space, make_space
+from ..vem.space import ORDERS, P1Space, P1Space3D, P2Space, has_part, make_space, part_facets
 from .constraints import Constraints, Prescribed
 from .discrete import DataError
 from .timegrid import TimeGrid
@@ -44,16 +49,24 @@ if TYPE_CHECKING:
 
 __all__ = ["DataError", "Problem"]
 
+#: The mesh type of a problem: polygons (2D) or polyhedra (3D). ``Problem`` without a
+#: parameter, as the 2D layers above write it, takes any.
+MeshT = TypeVar("MeshT", bound=Mesh | Mesh3D)
+
 
 @dataclass(frozen=True, eq=False)
-class Problem:
+class Problem(Generic[MeshT]):
     """Contact problem with wear on a tagged polygonal mesh (Problem 2.1 / 3.3).
 
     Parameters
     ----------
-    mesh : Mesh
+    mesh : Mesh or Mesh3D
         With tagged boundary parts; the paper's are ``clamped`` (Gamma_D),
-        ``traction`` (Gamma_N) and ``contact`` (Gamma_C).
+        ``traction`` (Gamma_N) and ``contact`` (Gamma_C). On a :class:`Mesh3D` (k = 1,
+        docs/method.md section 10) the boundary facets are faces, the loads, v* and the
+        prescribed components have three components (the 2-vector defaults of f1, f2
+        and v* become (0, 0, 0), (0, 0, 0) and (1, 0, 0)), and v* must keep one line
+        (:func:`~vemwear.contact.velocity_line`).
     material : Material
         Lamé coefficients lam, eta.
     time : TimeGrid
@@ -89,7 +102,7 @@ class Problem:
     traction-free.
     """
 
-    mesh: Mesh
+    mesh: MeshT
     material: Material
     time: TimeGrid
     f1: Field = (0.0, 0.0)
@@ -114,7 +127,11 @@ class Problem:
         object.__setattr__(self, "clamped", tuple(self.clamped))
         object.__setattr__(self, "displacement", tuple(self.displacement))
         object.__setattr__(self, "contacts", tuple(self.contacts))
-        check_mesh(self.mesh, require=())
+        if isinstance(self.mesh, Mesh3D):
+            self._defaults3d()
+            check_mesh3d(self.mesh, require=())
+        else:
+            check_mesh(self.mesh, require=())
         named = [
             *(c for c in self.clamped if c != "clamped" or c in self.mesh.part_names),
             *(d.part for d in self.displacement),
@@ -122,8 +139,9 @@ class Problem:
             *(c.part for c in self.parts),
         ]
         for name in named:
-            if not self.mesh.has_part(name):
-                raise MeshError(f"the mesh has no {name!r} boundary edges")
+            if not has_part(self.mesh, name):
+                kind = "faces" if self.dim == 3 else "edges"
+                raise MeshError(f"the mesh has no {name!r} boundary {kind}")
         left = self.constraints.free_rigid_motions()
         if left:
             raise MeshError(
@@ -135,6 +153,36 @@ class Problem:
         scale = float(max(np.abs(nodal["g"]).max(), 1e-300))
         for pc in self.parts:
             check_law(pc.p, scale=scale)
+
+    @property
+    def dim(self) -> int:
+        """The dimension d of the mesh (2 or 3)."""
+        return 3 if isinstance(self.mesh, Mesh3D) else 2
+
+    def _defaults3d(self) -> None:
+        """3D: the 2-vector defaults of f1, f2 and v* in three components; constant
+        vectors of other lengths refused."""
+
+        def as3(value: Any, default: tuple[float, ...], name: str) -> Any:
+            if callable(value) or isinstance(value, (Mapping, FoundationVelocity)):
+                return value
+            v = np.asarray(value, dtype=float)
+            if v.shape == (2,) and np.array_equal(v, default):
+                return (*default, 0.0)
+            if v.shape != (3,):
+                raise ValueError(f"{name} needs three components on a 3D mesh, got {value!r}")
+            return value
+
+        object.__setattr__(self, "f1", as3(self.f1, (0.0, 0.0), "f1"))
+        object.__setattr__(self, "f2", as3(self.f2, (0.0, 0.0), "f2"))
+        v = cast(FoundationVelocity, self.v_star)
+        if not callable(v.spec) and not isinstance(v.spec, Mapping):
+            object.__setattr__(
+                self, "v_star", FoundationVelocity(as3(v.spec, (1.0, 0.0), "v_star"))
+            )
+        for pc in self.parts:
+            if len(pc.velocity(float(self.time.t[0]))) != 3:
+                raise ValueError(f"v_star of {pc.part!r} needs three components on a 3D mesh")
 
     @cached_property
     def parts(self) -> tuple[ContactPart, ...]:
@@ -149,7 +197,7 @@ class Problem:
         """``{part: f2}``: the traction parts and their loads."""
         if isinstance(self.f2, Mapping):
             return dict(self.f2)
-        return {"traction": self.f2} if self.mesh.has_part("traction") else {}
+        return {"traction": self.f2} if has_part(self.mesh, "traction") else {}
 
     @cached_property
     def law(self) -> ComplianceLaw:
@@ -159,7 +207,7 @@ class Problem:
         return NodalLaw(tuple(pc.p for pc in self.parts), self.contact.part)
 
     @cached_property
-    def space(self) -> P1Space | P2Space:
+    def space(self) -> P1Space | P2Space | P1Space3D:
         """The virtual element space of order :attr:`order` on the mesh."""
         return make_space(self.mesh, self.order)
 
@@ -172,6 +220,21 @@ class Problem:
     def contact(self) -> ContactBoundary:
         """Nodes, weights and normals of Gamma_C (all contact parts)."""
         con = self.constraints
+        if isinstance(self.mesh, Mesh3D):
+            t = self.time.t
+            lines = np.array(
+                [
+                    velocity_line(velocity_levels(pc.velocity, t), f"v_star of {pc.part!r}")
+                    for pc in self.parts
+                ]
+            )
+            return contact_boundary3d(
+                self.mesh,
+                tuple(pc.part for pc in self.parts),
+                con.fully_fixed_vertices,
+                space=cast(P1Space3D, self.space),
+                directions=lines,
+            )
         return contact_boundary(
             self.mesh,
             tuple(pc.part for pc in self.parts),
@@ -222,14 +285,25 @@ class Problem:
         m = self.mesh
         # the order only when it is not the paper's k = 1 (earlier fingerprints stay valid)
         order = {} if self.order == 1 else {"order": self.order}
-        return {
-            **order,
-            "mesh": {
+        if isinstance(m, Mesh3D):
+            nf = np.diff(m.cell_offsets)
+            mesh_desc: dict[str, Any] = {
+                "dim": 3,
+                "points": m.n_points,
+                "cells": m.n_cells,
+                "h": float(m.cell_diameters.max()),
+                "cells_by_face_count": {str(n): int(np.sum(nf == n)) for n in np.unique(nf)},
+            }
+        else:
+            mesh_desc = {
                 "points": m.n_points,
                 "cells": m.n_cells,
                 "h": m.h,
                 "cells_by_vertex_count": {str(n): len(i) for n, (i, _) in m.groups.items()},
-            },
+            }
+        return {
+            **order,
+            "mesh": mesh_desc,
             "material": {"lam": self.material.lam, "eta": self.material.eta},
             "time": self.time.describe(),
             "f1": desc(self.f1),
@@ -260,7 +334,7 @@ class Problem:
         traction part by edge quadrature."""
         F = self.space.body_force(self.f1, t)
         for name, f2 in self.tractions.items():
-            F = F + self.space.boundary_load(self.mesh.part_edges(name), f2, t)
+            F = F + self.space.boundary_load(part_facets(self.mesh, name), f2, t)
         return F
 
     def fingerprint(self) -> dict[str, Any]:
@@ -281,7 +355,19 @@ class Problem:
             "format": "vemwear-problem/1",
             "vemwear_version": __version__,
             "description": self.describe(),
-            "mesh": sha256_arrays(m.points, m.cell_offsets, m.cell_vertices, m.boundary_tags),
+            "mesh": (
+                sha256_arrays(
+                    m.points,
+                    m.face_offsets,
+                    m.face_vertices,
+                    m.cell_offsets,
+                    m.cell_faces,
+                    m.cell_face_signs,
+                    m.boundary_tags,
+                )
+                if isinstance(m, Mesh3D)
+                else sha256_arrays(m.points, m.cell_offsets, m.cell_vertices, m.boundary_tags)
+            ),
             "time": sha256_arrays(t),
             "nodal": sha256_arrays(*(self.nodal[k] for k in ("g", "mu", "kappa", "gap"))),
             "v_star": sha256_arrays(

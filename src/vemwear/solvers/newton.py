@@ -129,12 +129,13 @@ class CondensedNewton:
             self.factor = schur_factorize(
                 system.K, cd[free], system.dof_points, self.options.backend
             )
+            k = system.contact_dofs.shape[1]  # the dimension d
             if np.all(free):
-                C = self.factor.S_inv.reshape(m, 2, m, 2)  # block of K^{-1} on contact dofs
+                C = self.factor.S_inv.reshape(m, k, m, k)  # block of K^{-1} on contact dofs
             else:
-                full = np.zeros((2 * m, 2 * m))
+                full = np.zeros((k * m, k * m))
                 full[np.ix_(free, free)] = self.factor.S_inv
-                C = full.reshape(m, 2, m, 2)
+                C = full.reshape(m, k, m, k)
             nu, tau = system.normals, system.tangents
             self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
             self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)

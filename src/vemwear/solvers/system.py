@@ -42,16 +42,17 @@ class ContactSystem:
     Attributes
     ----------
     K : (nf, nf) sparse stiffness on the free dofs
-    contact_dofs : (m, 2) free-dof ids of the x and y components at each contact node
+    contact_dofs : (m, d) free-dof ids of the d components at each contact node
         (-1 for a prescribed component); None when ``trace`` is given
-    normals, tangents : (m, 2) unit nu_a and tau_a
+    normals, tangents : (m, d) unit nu_a and tau_a (in 3D tau_a is the line of the
+        friction force, :mod:`vemwear.contact.boundary3d`)
     weights : (m,) nodal weights
     g : (m,) thickness of the soft layer (bound on ``N u``)
     p : the compliance law
-    dof_points : (nf, 2) coordinates of the vertex of each free dof (for the ordering
+    dof_points : (nf, d) coordinates of the vertex of each free dof (for the ordering
         of the factorization)
-    trace : (2 m, nf) sparse, optional
-        Rows ``2 a + c``: component c of the displacement at node a from the free dofs,
+    trace : (d m, nf) sparse, optional
+        Rows ``d a + c``: component c of the displacement at node a from the free dofs,
         for spaces whose contact nodes are not dofs (k = 2: edge midpoints); then
         ``N = diag(nu_x) T_x + diag(nu_y) T_y`` and the same for ``Tau``.
     """
@@ -74,7 +75,7 @@ class ContactSystem:
             self._init_from_trace()
             return
         m, nf = len(self.weights), self.K.shape[0]
-        rows = np.repeat(np.arange(m), 2)
+        rows = np.repeat(np.arange(m), np.shape(self.contact_dofs)[1])
         cols = np.asarray(self.contact_dofs).ravel()
         free = cols >= 0  # prescribed components do not enter N and Tau
         for name, direction in (("N", self.normals), ("Tau", self.tangents)):
@@ -93,8 +94,11 @@ class ContactSystem:
         if self.trace is None:
             raise ValueError("ContactSystem: give contact_dofs or trace")
         T = sp.csr_matrix(self.trace)
+        k = np.shape(self.normals)[1]
         for name, d in (("N", self.normals), ("Tau", self.tangents)):
-            op = sp.diags(np.asarray(d)[:, 0]) @ T[0::2] + sp.diags(np.asarray(d)[:, 1]) @ T[1::2]
+            op = sp.diags(np.asarray(d)[:, 0]) @ T[0::k] + sp.diags(np.asarray(d)[:, 1]) @ T[1::k]
+            for c in range(2, k):
+                op = op + sp.diags(np.asarray(d)[:, c]) @ T[c::k]
             op = sp.csr_matrix(op)
             op.eliminate_zeros()
             object.__setattr__(self, name, op)

@@ -29,6 +29,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
+from ..mesh.polyhedra import Mesh3D
 from ..mesh.polymesh import Mesh
 from .assembly import body_force_vector, edge_load_vector, stiffness
 from .dofs2 import (
@@ -44,8 +45,18 @@ from .dofs2 import (
 from .local import Material
 from .projection import Projection
 from .quadrature import Field
+from .space3d import P1Space3D
 
-__all__ = ["ORDERS", "P1Space", "P2Space", "Space", "make_space"]
+__all__ = [
+    "ORDERS",
+    "P1Space",
+    "P1Space3D",
+    "P2Space",
+    "Space",
+    "has_part",
+    "make_space",
+    "part_facets",
+]
 
 #: The orders k of the implemented spaces.
 ORDERS = (1, 2)
@@ -56,9 +67,16 @@ Scalar = float | Callable[[NDArray[np.float64], float], ArrayLike]
 
 
 class Space(Protocol):
-    """What the layers above the element level ask of a virtual element space."""
+    """What the layers above the element level ask of a virtual element space.
 
-    mesh: Mesh
+    The boundary *facets* are edges ((m, 2) vertex pairs) on a 2D :class:`Mesh` and
+    face ids ((m,) ints) on a :class:`Mesh3D` (:func:`part_facets`); global dof ``i`` of
+    the vertex values is component ``i % dim`` at vertex ``i // dim``.
+    """
+
+    @property
+    def mesh(self) -> Mesh | Mesh3D: ...
+
     dim: int
     order: int
 
@@ -93,6 +111,21 @@ class Space(Protocol):
     def trace_operator(
         self, vertices: NDArray[np.int64], edges: NDArray[np.int64]
     ) -> sp.csr_matrix: ...
+
+
+def part_facets(mesh: Mesh | Mesh3D, name: str) -> NDArray[np.int64]:
+    """The boundary facets of a part: its edges ((m, 2)) in 2D, its face ids ((m,)) in
+    3D (none for a part the mesh does not have)."""
+    if isinstance(mesh, Mesh3D):
+        return mesh.part_faces(name)
+    return mesh.part_edges(name)
+
+
+def has_part(mesh: Mesh | Mesh3D, name: str) -> bool:
+    """Whether the part exists and has boundary facets."""
+    if isinstance(mesh, Mesh3D):
+        return len(mesh.part_faces(name)) > 0
+    return mesh.has_part(name)
 
 
 def _lengths(mesh: Mesh, edges: NDArray[np.int64]) -> NDArray[np.float64]:
@@ -318,8 +351,12 @@ class P2Space:
         )
 
 
-def make_space(mesh: Mesh, order: int = 1) -> P1Space | P2Space:
-    """The space of order ``order`` (1 or 2) on ``mesh``."""
+def make_space(mesh: Mesh | Mesh3D, order: int = 1) -> P1Space | P2Space | P1Space3D:
+    """The space of order ``order`` (1 or 2) on ``mesh`` (order 1 on a :class:`Mesh3D`)."""
+    if isinstance(mesh, Mesh3D):
+        if order != 1:
+            raise ValueError(f"3D meshes have the space of order 1 only, got order {order!r}")
+        return P1Space3D(mesh)
     if order == 1:
         return P1Space(mesh)
     if order == 2:
