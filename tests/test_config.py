@@ -223,7 +223,7 @@ ERRORS = [
     (
         "contact.mu",
         [0.2],
-        "[contact] mu must be a number, an expression string in x, y or a "
+        "[contact] mu must be a number, an expression string in x, y, z or a "
         "table { along, at, values }, got an array ([0.2])",
     ),
     ("contact.mu", -0.2, "[contact] mu must be >= 0 on the contact part; it is -0.2 at contact"),
@@ -294,7 +294,8 @@ ERRORS = [
     (
         "loads.f1",
         [0, True],
-        "[loads] f1[1] must be a number or an expression string in x, y, t, got a boolean (True)",
+        "[loads] f1[1] must be a number or an expression string in x, y, z, t, got a boolean "
+        "(True)",
     ),
     (
         "output.times",

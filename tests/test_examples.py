@@ -19,6 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SMALL: dict[str, dict[str, object]] = {
     "squares": {"mesh.divisions": [8, 4], "time.steps": 4},
     "voronoi": {"mesh.n_cells": 32, "time.steps": 4},
+    "hexahedra": {"mesh.divisions": [4, 4, 2], "time.steps": 4},
 }
 
 
@@ -41,7 +42,9 @@ def test_the_configs_are_package_data() -> None:
         assert config_path(name + ".toml") == config_path(name)
     assert (files("vemwear") / "py.typed").is_file()
     assert (files("vemwear") / "__init__.pyi").is_file()
-    with pytest.raises(KeyError, match="available: block_displacement, example_5_2_set1"):
+    with pytest.raises(
+        KeyError, match="available: block_displacement, example_3d, example_5_2_set1"
+    ):
         config_path("example_9")
 
 

@@ -158,6 +158,11 @@ def _setup_example(p: argparse.ArgumentParser) -> None:
         "examples 5.2, 5.3, 5.4)",
     )
     _common(p, solve=True, outdir_required=False)
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="example 3d only: small sizes (8 + 16 cells, h = 1, 1/2 against 1/4), seconds",
+    )
     g = p.add_argument_group("Example 5.5 only")
     g.add_argument(
         "--reference-h",
@@ -492,6 +497,10 @@ def cmd_example(args: argparse.Namespace) -> int:
 
     mod = load_example(args.name)
     extra = _example_extra(args)
+    if args.quick:
+        if args.name != "3d":
+            raise UsageError("--quick: only for example 3d (vemwear paper --quick for the others)")
+        extra["quick"] = True
     if args.order != 1:
         if args.name == "5.5":
             raise UsageError("--order 2: for examples 5.2, 5.3 and 5.4 (not 5.5 yet)")

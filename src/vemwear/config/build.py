@@ -24,7 +24,9 @@ from numpy.typing import NDArray
 
 from ..contact import arc_length, table_values, velocity_levels
 from ..mesh import Mesh, MeshError, read_mesh, select_parts
-from ..mesh.registry import family
+from ..mesh.boundary3d import select_parts3d
+from ..mesh.io3d import mesh_file_dim, read_mesh3d
+from ..mesh.polyhedra import Mesh3D
 from ..simulate import Problem, SolverOptions, TimeGrid
 from ..simulate.cycles import CycleJump
 from ..solvers import resolve_backend
@@ -106,6 +108,8 @@ class Sizes:
         ``store_u`` certainly asks for).
     paraview : bool
         Whether a ParaView series is written.
+    dim : int
+        2 or 3: the dimension of the generated mesh (2 for a mesh file).
     """
 
     source: str
@@ -114,6 +118,7 @@ class Sizes:
     kept: int
     stored_u: int
     paraview: bool
+    dim: int = 2
 
 
 def _sizes(src: str, c: s.ConfigFile) -> Sizes:
@@ -127,9 +132,11 @@ def _sizes(src: str, c: s.ConfigFile) -> Sizes:
     else:
         L = len(t.dt) + 1
     m = c.mesh
-    cells = 0
+    cells, dim = 0, 2
     if not isinstance(m, s.MeshFile):
-        cells = family(m.generator).estimate_cells(m.model_dump(exclude_unset=True))
+        fam = s.mesh_family(m.generator)
+        cells = fam.estimate_cells(m.model_dump(exclude_unset=True))
+        dim = fam.dim
     store, out = c.output.store_u, c.output
     stored = 1  # the final level; times and a list may fall on fewer levels than given
     if store == "all":
@@ -137,25 +144,29 @@ def _sizes(src: str, c: s.ConfigFile) -> Sizes:
     elif isinstance(store, int) and not isinstance(store, bool):
         stored = -(-L // store)
     kept = max(-(-L // out.every), stored)
-    return Sizes(src, L, int(cells), kept, min(stored, L), out.vtk)
+    return Sizes(src, L, int(cells), kept, min(stored, L), out.vtk, dim)
 
 
 # ---------------------------------------------------------------------------- expressions
 class NodalExpression:
-    """``g``, ``mu`` or ``kappa`` as an expression in ``x, y``, called with the (m, 2)
-    contact nodes; ``__name__`` is its text."""
+    """``g``, ``mu`` or ``kappa`` as an expression in ``x, y, z``, called with the (m, 2)
+    or (m, 3) contact nodes (``z = 0`` in 2D); ``__name__`` is its text."""
 
     def __init__(self, expr: Expression) -> None:
         self.expr, self.__name__ = expr, expr.text
 
     def __call__(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
         P = np.asarray(points, dtype=float)
-        return self.expr(x=P[..., 0], y=P[..., 1])
+        if "z" not in self.expr.names:
+            return self.expr(x=P[..., 0], y=P[..., 1])
+        z = P[..., 2] if P.shape[-1] == 3 else np.zeros(P.shape[:-1])
+        return self.expr(x=P[..., 0], y=P[..., 1], z=z)
 
 
 class FieldExpression:
-    """A load of numbers, expressions in ``x, y, t`` and (a traction) tables
-    ``{along, at, values}``: ``f(points, t)`` -> (m, 2).
+    """A load of numbers, expressions in ``x, y, z, t`` and (a traction) tables
+    ``{along, at, values}``: ``f(points, t)`` -> (m, d), d = 2 or 3 its components
+    (``z = 0`` in 2D).
 
     ``arc(points)`` gives the arc length along the load's boundary part (tables along
     ``s``)."""
@@ -171,8 +182,11 @@ class FieldExpression:
         self.uses_t = any(isinstance(c, Expression) and "t" in c.names for c in self.parts)
 
     def __call__(self, x: NDArray[np.float64], t: float) -> NDArray[np.float64]:
-        P = np.asarray(x, dtype=float).reshape(-1, 2)
+        X = np.asarray(x, dtype=float)
+        P = X.reshape(-1, 3 if X.ndim == 2 and X.shape[1] == 3 else 2)
         env = {"x": P[:, 0], "y": P[:, 1], "t": np.full(len(P), float(t))}
+        if any(isinstance(c, Expression) and "z" in c.names for c in self.parts):
+            env["z"] = P[:, 2] if P.shape[1] == 3 else np.zeros(len(P))
         cols = []
         for i, c in enumerate(self.parts):
             if isinstance(c, dict):
@@ -220,18 +234,23 @@ def _data(v: Any, cls: type | None, raw: Any) -> Any:
 
 
 # ---------------------------------------------------------------------------- mesh, boundary
-def _mesh(src: str, m: Any, raw: Mapping[str, Any], base_dir: Path) -> tuple[Mesh, dict[str, Any]]:
+def _mesh(
+    src: str, m: Any, raw: Mapping[str, Any], base_dir: Path
+) -> tuple[Mesh | Mesh3D, dict[str, Any]]:
     if isinstance(m, s.MeshFile):
         path = Path(m.file).expanduser()
         path = path if path.is_absolute() else base_dir / path
         if not path.is_file():
             raise ConfigError(f"{src}: [mesh] file not found: {path}")
         try:
-            return read_mesh(path), {"file": str(path.resolve())}
+            read: Callable[[Path], Mesh | Mesh3D] = (
+                read_mesh3d if mesh_file_dim(path) == 3 else read_mesh
+            )
+            return read(path), {"file": str(path.resolve())}
         except MeshError as exc:
             msg = str(exc).removeprefix(f"{path}: ")
             raise ConfigError(f"{src}: [mesh] file {m.file!r}: {msg}") from None
-    fam = family(m.generator)
+    fam = s.mesh_family(m.generator)
     options = m.model_dump(exclude_unset=True, exclude={"generator"})
     with at(src, "[mesh]", raw):
         try:
@@ -242,7 +261,56 @@ def _mesh(src: str, m: Any, raw: Mapping[str, Any], base_dir: Path) -> tuple[Mes
 
 
 def _pt(p: NDArray[np.float64]) -> str:
-    return f"({p[0]:.6g}, {p[1]:.6g})"
+    return "(" + ", ".join(f"{v:.6g}" for v in p) + ")"
+
+
+def _check_dims(src: str, c: s.ConfigFile, raw: Mapping[str, Any], dim: int) -> None:
+    """The vectors of the file have ``dim`` components (2 on a 2D mesh, 3 on a 3D one)
+    and ``uz`` is given on 3D meshes only."""
+    names = {2: "[x, y]", 3: "[x, y, z]"}
+    what = f"a {dim}D mesh"
+    if not isinstance(c.mesh, s.MeshFile):
+        what += f" ({c.mesh.generator!r})"
+
+    def need(path: str, v: Any) -> None:
+        if isinstance(v, list) and len(v) != dim:
+            raise ConfigError(
+                f"{src}: {path} = {show_raw(v)} has {len(v)} components; {what} needs {dim} "
+                f"{names[dim]}"
+            )
+
+    loads = raw.get("loads", {})
+    for key in ("f1", "f2"):
+        if key in loads:
+            need(f"[loads] {key}", loads[key])
+    b = raw.get("boundary")
+    if isinstance(b, dict):
+        tr = b.get("traction")
+        if isinstance(tr, list):
+            for i, t in enumerate(tr):
+                if isinstance(t, dict):
+                    need(f"[[boundary.traction]] {i + 1} f2", t.get("f2"))
+        for i, d in enumerate(b.get("displacement") or []):
+            if dim == 2 and isinstance(d, dict) and "uz" in d:
+                raise ConfigError(
+                    f"{src}: [[boundary.displacement]] {i + 1}: uz is a component of 3D meshes; "
+                    f"{what} has ux and uy"
+                )
+    tables = raw["contact"] if isinstance(raw["contact"], list) else [raw["contact"]]
+    for i, t in enumerate(tables):
+        path = f"[[contact]] {i + 1}" if isinstance(raw["contact"], list) else "[contact]"
+        v = t.get("v_star")
+        if isinstance(v, dict):
+            for j, row in enumerate(v.get("values", [])):
+                need(f"{path} v_star.values[{j}]", row)
+        else:
+            need(f"{path} v_star", v)
+
+
+def show_raw(v: Any) -> str:
+    """A TOML array as written (short)."""
+    text = "[" + ", ".join(repr(x) if isinstance(x, str) else f"{x:g}" for x in v) + "]"
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 # ---------------------------------------------------------------------------- time, loads
@@ -312,7 +380,7 @@ def _problem(
     c: s.ConfigFile,
     raw: Mapping[str, Any],
     parts: Roles,
-    mesh: Mesh,
+    mesh: Mesh | Mesh3D,
     material: Material,
     grid: TimeGrid,
     where: str,
@@ -324,7 +392,11 @@ def _problem(
         f2 = {n: _data(v, FieldExpression, rv) for n, (v, rv) in parts.tractions.items()}
         for n, f in f2.items():
             if isinstance(f, FieldExpression):
-                f.arc = functools.partial(arc_length, mesh, n)
+                f.arc = (
+                    _x_coordinate
+                    if isinstance(mesh, Mesh3D)
+                    else functools.partial(arc_length, mesh, n)
+                )
     name, ct, rt, _ = parts.contacts[0]
     single = len(parts.contacts) == 1 and name == "contact"
     try:
@@ -368,6 +440,11 @@ def _problem(
         raise from_library(exc, src, section, rt if single else {}) from None
 
 
+def _x_coordinate(P: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``s`` of a 3D mesh: the x coordinate (a surface has no arc length)."""
+    return np.asarray(P[:, 0])
+
+
 def _check_velocity(src: str, pr: Problem, parts: Roles) -> None:
     """``v_star`` is a finite 2-vector at every time level (an expression or a table of t
     may overflow or divide by zero)."""
@@ -390,8 +467,13 @@ def _check_velocity(src: str, pr: Problem, parts: Roles) -> None:
 def _check_loads(src: str, pr: Problem, parts: Roles) -> None:
     """Loads given by expressions or tables give finite load vectors at every time level."""
     fields: list[tuple[str, Any, NDArray[np.int64] | None]] = [("[loads] f1", pr.f1, None)]
+    three = isinstance(pr.mesh, Mesh3D)
     fields += [
-        (f"{parts.where[n]} f2" if n in parts.tractions else "[loads] f2", f, pr.mesh.part_edges(n))
+        (
+            f"{parts.where[n]} f2" if n in parts.tractions else "[loads] f2",
+            f,
+            pr.mesh.part_faces(n) if isinstance(pr.mesh, Mesh3D) else pr.mesh.part_edges(n),
+        )
         for n, f in pr.tractions.items()
     ]
     for name, f, edges in fields:
@@ -401,11 +483,16 @@ def _check_loads(src: str, pr: Problem, parts: Roles) -> None:
             for n in range(len(pr.time.t)) if f.uses_t else range(1):
                 t = float(pr.time.t[n])
                 try:
-                    F = (
-                        body_force_vector(pr.mesh, f, t)
-                        if edges is None
-                        else edge_load_vector(pr.mesh, edges, f, t)
-                    ).reshape(-1, 2)
+                    if three:
+                        sp = pr.space
+                        F = sp.body_force(f, t) if edges is None else sp.boundary_load(edges, f, t)
+                        F = F.reshape(-1, 3)
+                    else:
+                        F = (
+                            body_force_vector(pr.mesh, f, t)
+                            if edges is None
+                            else edge_load_vector(pr.mesh, edges, f, t)
+                        ).reshape(-1, 2)
                 except ValueError as exc:  # a table
                     raise ConfigError(f"{src}: {name}{str(exc).removeprefix('f2')}") from None
                 bad = np.flatnonzero(~np.all(np.isfinite(F), axis=1))
@@ -517,9 +604,13 @@ def parse_config(
         resolve_backend(sol.backend)
 
     mesh, mesh_source = _mesh(src, c.mesh, raw["mesh"], Path(base_dir))
+    _check_dims(src, c, raw, 3 if isinstance(mesh, Mesh3D) else 2)
     if parts.selectors:
         with at(src, "[boundary]", raw.get("boundary", {})):
-            mesh = select_parts(mesh, parts.selectors)
+            if isinstance(mesh, Mesh3D):
+                mesh = select_parts3d(mesh, parts.selectors)
+            else:
+                mesh = select_parts(mesh, parts.selectors)
         where = "[boundary]"
     else:
         where = f"[mesh] file {c.mesh.file!r}:"

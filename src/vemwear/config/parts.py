@@ -29,15 +29,19 @@ __all__ = ["ComponentExpression", "Roles", "contact_law", "contact_parts", "role
 
 
 class ComponentExpression:
-    """A prescribed displacement component as an expression in ``x, y, t``:
-    ``f(points, t)`` -> (n,) values; ``__name__`` is its text."""
+    """A prescribed displacement component as an expression in ``x, y, z, t``:
+    ``f(points, t)`` -> (n,) values of the (n, 2) or (n, 3) points (``z = 0`` in 2D);
+    ``__name__`` is its text."""
 
     def __init__(self, expr: Expression) -> None:
         self.expr, self.__name__ = expr, expr.text
 
     def __call__(self, x: NDArray[np.float64], t: float) -> NDArray[np.float64]:
-        P = np.asarray(x, dtype=float).reshape(-1, 2)
-        return np.asarray(self.expr(x=P[:, 0], y=P[:, 1], t=np.full(len(P), float(t))), dtype=float)
+        X = np.asarray(x, dtype=float)
+        P = X.reshape(-1, 3 if X.ndim == 2 and X.shape[1] == 3 else 2)
+        z = P[:, 2] if P.shape[1] == 3 else np.zeros(len(P))
+        env = {"x": P[:, 0], "y": P[:, 1], "z": z, "t": np.full(len(P), float(t))}
+        return np.asarray(self.expr(**env), dtype=float)
 
 
 def contact_law(law: Any) -> LinearCompliance | TableCompliance:
@@ -119,9 +123,11 @@ def roles(src: str, c: s.ConfigFile, raw: Mapping[str, Any]) -> Roles:
             name = dp.name or f"displacement{i + 1}"
             path = f"[[boundary.displacement]] {i + 1}"
             r.add(src, name, dp.on, path)
-            if dp.ux is None and dp.uy is None:
+            if dp.ux is None and dp.uy is None and dp.uz is None:
                 raise ConfigError(f"{src}: {path}: give ux, uy or both")
-            r.displacement.append(Prescribed(name, _component(dp.ux), _component(dp.uy)))
+            r.displacement.append(
+                Prescribed(name, _component(dp.ux), _component(dp.uy), _component(dp.uz))
+            )
     for i, (ct, rt) in enumerate(zip(tables, raw_tables, strict=True)):
         path = f"[[contact]] {i + 1}" if several else "[contact]"
         name = ct.name or (f"contact{i + 1}" if several else "contact")

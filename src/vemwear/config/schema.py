@@ -35,7 +35,8 @@ from pydantic import (
 from pydantic.json_schema import SkipJsonSchema
 
 from ..mesh.boundary import SIDES
-from ..mesh.registry import FAMILIES, Family, family
+from ..mesh.registry import FAMILIES, Family, lookup
+from ..mesh.registry3d import FAMILIES_3D
 from ..simulate import Problem, SolverOptions
 from ..solvers import BACKENDS, SOLVERS
 from ..vem import STABILIZATIONS
@@ -130,6 +131,18 @@ def _words(tp: Any) -> str:
 
 
 Vector: TypeAlias = Annotated[list[float], Field(min_length=2, max_length=2)]
+#: A vector of a 2D (2 components) or a 3D (3 components) problem; the mesh decides which.
+Vector23: TypeAlias = Annotated[list[float], Field(min_length=2, max_length=3)]
+
+
+def mesh_family(name: str) -> Family[Any]:
+    """The 2D or 3D mesh family called ``name`` (or an alias); a ValueError suggests the
+    closest name among all."""
+    return lookup(name, _BY_NAME, _EVERY)
+
+
+_EVERY: dict[str, Family[Any]] = {**FAMILIES, **FAMILIES_3D}
+_BY_NAME = {n: f for f in _EVERY.values() for n in (f.name, *f.aliases)}
 
 
 # ---------------------------------------------------------------------------- boundary
@@ -161,7 +174,9 @@ class CoefficientTable(Section):
 
     model_config = ConfigDict(title="table { along, at, values }")
     along: Literal["x", "y", "s"] = Field(
-        "x", description="coordinate of the contact nodes: x, y or s (arc length along Gamma_C)"
+        "x",
+        description="coordinate of the contact nodes: x, y or s (arc length along Gamma_C; "
+        "x in 3D)",
     )
     at: list[float] = Field(description="interpolation points, strictly increasing")
     values: list[float] = Field(description="the values there, as many as `at`")
@@ -190,7 +205,7 @@ class VelocityTable(Section):
 
     model_config = ConfigDict(title="table { t, values }")
     t: list[float] = Field(min_length=1, description="times, strictly increasing")
-    values: list[Vector] = Field(description="velocities [vx, vy] there")
+    values: list[Vector23] = Field(description="velocities [vx, vy] (3D: [vx, vy, vz]) there")
 
     @model_validator(mode="after")
     def _increasing(self) -> "VelocityTable":
@@ -223,40 +238,42 @@ def _law_form(v: Any) -> str | None:
 
 Law: TypeAlias = choice(_law_form, _law_error, **LAWS)  # type: ignore[valid-type]
 Coefficient: TypeAlias = by_kind(  # type: ignore[valid-type]
-    "a number, an expression string in x, y or a table { along, at, values }",
+    "a number, an expression string in x, y, z or a table { along, at, values }",
     number=float,
-    string=expression("x", "y"),
+    string=expression("x", "y", "z"),
     table=CoefficientTable,
 )
 
 
 def components(*names: str) -> Any:
-    """An array of 2 numbers or expression strings in ``names``."""
+    """An array of 2 (a 2D mesh) or 3 (a 3D mesh) numbers or expression strings in
+    ``names``."""
     what = f"a number or an expression string in {', '.join(names)}"
     item = by_kind(what, number=float, string=expression(*names))
-    return Annotated[list[item], Field(min_length=2, max_length=2)]  # type: ignore[valid-type]
+    return Annotated[list[item], Field(min_length=2, max_length=3)]  # type: ignore[valid-type]
 
 
 VStar: TypeAlias = by_kind(  # type: ignore[valid-type]
-    "an array [vx, vy] of numbers or expression strings in t, or a table { t, values }",
+    "an array [vx, vy] (3D: [vx, vy, vz]) of numbers or expression strings in t, or a table "
+    "{ t, values }",
     array=components("t"),
     table=VelocityTable,
 )
-Load: TypeAlias = components("x", "y", "t")  # type: ignore[valid-type]
+Load: TypeAlias = components("x", "y", "z", "t")  # type: ignore[valid-type]
 TractionComponent: TypeAlias = by_kind(  # type: ignore[valid-type]
-    "a number, an expression string in x, y, t or a table { along, at, values }",
+    "a number, an expression string in x, y, z, t or a table { along, at, values }",
     number=float,
-    string=expression("x", "y", "t"),
+    string=expression("x", "y", "z", "t"),
     table=CoefficientTable,
 )
 TractionLoad: TypeAlias = Annotated[
     list[TractionComponent],  # type: ignore[valid-type]
-    Field(min_length=2, max_length=2),
+    Field(min_length=2, max_length=3),
 ]
 DispComponent: TypeAlias = by_kind(  # type: ignore[valid-type]
-    "a number or an expression string in x, y, t",
+    "a number or an expression string in x, y, z, t",
     number=float,
-    string=expression("x", "y", "t"),
+    string=expression("x", "y", "z", "t"),
 )
 
 
@@ -288,8 +305,13 @@ class Contact(Section):
 class Loads(Section):
     """Body force and traction."""
 
-    f1: Load = Field(_default(Problem, "f1"), description="body force [f1x, f1y]")
-    f2: Load = Field(_default(Problem, "f2"), description="traction [f2x, f2y] on Gamma_N")
+    f1: Load = Field(
+        _default(Problem, "f1"), description="body force [f1x, f1y] (3D: [f1x, f1y, f1z])"
+    )
+    f2: Load = Field(
+        _default(Problem, "f2"),
+        description="traction [f2x, f2y] (3D: [f2x, f2y, f2z]) on Gamma_N",
+    )
 
 
 class Material(Section):
@@ -474,6 +496,7 @@ class DisplacementPart(Section):
     on: Selector = Field(title="selector", description="where")
     ux: DispComponent | None = Field(None, description="prescribed u_x")
     uy: DispComponent | None = Field(None, description="prescribed u_y")
+    uz: DispComponent | None = Field(None, description="prescribed u_z (3D meshes)")
 
 
 class TractionPart(Section):
@@ -484,8 +507,8 @@ class TractionPart(Section):
     )
     on: Selector = Field(title="selector", description="where")
     f2: TractionLoad = Field(
-        description="traction [f2x, f2y] on this part; a table is taken at the points of "
-        "the part (along s: the arc length along it)"
+        description="traction [f2x, f2y] (3D: [f2x, f2y, f2z]) on this part; a table is taken "
+        "at the points of the part (along s: the arc length along it; x in 3D)"
     )
 
 
@@ -523,7 +546,7 @@ class Boundary(Section):
     displacement: list[DisplacementPart] | None = Field(
         None,
         title="tables",
-        description="[[boundary.displacement]] tables { name, on, ux, uy }: prescribed "
+        description="[[boundary.displacement]] tables { name, on, ux, uy, uz }: prescribed "
         "displacement components",
     )
 
@@ -538,7 +561,9 @@ class MeshFile(Section):
     """A mesh file."""
 
     file: str = Field(
-        description="mesh file (meshio: .vtu, .msh, ...), relative to the configuration file"
+        description="mesh file (meshio: .vtu, .msh, ...), relative to the configuration file; "
+        "a file with volume cells (tetrahedra, hexahedra, wedges, pyramids, polyhedra) is a 3D "
+        "mesh"
     )
 
 
@@ -562,7 +587,7 @@ def _family_model(fam: Family) -> type[Generated]:
     )
 
 
-MESH_FORMS: dict[str, type[Section]] = {n: _family_model(f) for n, f in FAMILIES.items()}
+MESH_FORMS: dict[str, type[Section]] = {n: _family_model(f) for n, f in _EVERY.items()}
 MESH_FORMS["file"] = MeshFile
 
 
@@ -570,7 +595,7 @@ def _mesh_form(v: Any) -> str | None:
     if not isinstance(v, dict) or ("file" in v) == ("generator" in v):
         return None
     try:
-        return "file" if "file" in v else family(v["generator"]).name
+        return "file" if "file" in v else mesh_family(v["generator"]).name
     except (ValueError, TypeError):
         return None
 
@@ -583,7 +608,7 @@ def _mesh_error(v: Any) -> str:
     if not isinstance(v["generator"], str):
         return f"generator must be a string, {got(v['generator'])}"
     try:
-        family(v["generator"])
+        mesh_family(v["generator"])
     except ValueError as exc:
         return f"generator = {exc}"
     return "is invalid"  # pragma: no cover - _mesh_form accepted it

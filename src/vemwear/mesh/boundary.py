@@ -11,10 +11,14 @@ from numpy.typing import NDArray
 from .polymesh import Mesh
 
 SIDES = ("left", "right", "bottom", "top")
+#: The names of the 3D box's sides, accepted for the sides of a rectangle too.
+SIDE_ALIASES = {"xmin": "left", "xmax": "right", "ymin": "bottom", "ymax": "top"}
 
 
 def side_predicate(mesh: Mesh, side: str, rtol: float = 1e-9):
-    """Predicate selecting edge midpoints on one side of the mesh's bounding box."""
+    """Predicate selecting edge midpoints on one side of the mesh's bounding box
+    (``left``, ``right``, ``bottom``, ``top`` or ``xmin``, ``xmax``, ``ymin``, ``ymax``)."""
+    side = SIDE_ALIASES.get(side, side)
     lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
     tol = rtol * float(np.max(hi - lo))
     if side == "left":
@@ -83,7 +87,7 @@ def select_parts(mesh: Mesh, parts: Mapping[str, Any]) -> Mesh:
             continue
         hit = np.zeros(len(edges), dtype=bool)
         for it in [spec] if isinstance(spec, str | tuple) else spec:
-            if isinstance(it, str) and it not in SIDES:
+            if isinstance(it, str) and it not in SIDES and it not in SIDE_ALIASES:
                 hit |= _named(mesh, name, it)
                 continue
             try:

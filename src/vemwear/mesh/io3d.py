@@ -42,7 +42,7 @@ from .polymesh import PARTS, MeshError
 if TYPE_CHECKING:
     import meshio
 
-__all__ = ["from_meshio3d", "read_mesh3d", "write_mesh3d"]
+__all__ = ["from_meshio3d", "mesh_file_dim", "read_mesh3d", "write_mesh3d"]
 
 #: Outward local faces of the linear volume cells (VTK / meshio vertex order).
 LOCAL_FACES: dict[str, tuple[tuple[int, ...], ...]] = {
@@ -360,3 +360,21 @@ def read_mesh3d(path: str | os.PathLike[str], *, check: bool = True) -> Mesh3D:
     except (ValueError, IndexError, KeyError, TypeError) as exc:
         raise MeshError(f"{path}: cannot read mesh ({type(exc).__name__}: {exc})") from None
     return mesh
+
+
+#: meshio cell types of volume cells (and the prefix of meshio's polyhedra).
+VOLUME_TYPES = (*LOCAL_FACES, "polyhedron")
+
+
+def mesh_file_dim(path: str | os.PathLike[str]) -> int:
+    """3 if the mesh file holds volume cells (tetrahedra, hexahedra, wedges, pyramids,
+    polyhedra), else 2 (also for a file meshio cannot read: the 2D reader reports it)."""
+    import meshio
+
+    chatter = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(chatter), contextlib.redirect_stderr(chatter):
+            m = meshio.read(Path(path))
+    except (Exception, SystemExit):  # the reader that follows says why
+        return 2
+    return 3 if any(b.type.startswith(VOLUME_TYPES) for b in m.cells) else 2

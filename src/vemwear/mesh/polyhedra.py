@@ -255,6 +255,17 @@ class Mesh3D:
         sign[self.cell_faces] = self.cell_face_signs  # boundary faces occur once
         return sign[self.boundary_faces]
 
+    @property
+    def parts(self) -> tuple[str, ...]:
+        """Names of the parts that have boundary faces, in code order."""
+        present = set(np.unique(np.asarray(self.boundary_tags)).tolist())
+        return tuple(n for i, n in enumerate(self.part_names) if i + 1 in present)
+
+    def part_counts(self) -> dict[str, int]:
+        """Boundary faces of every named part."""
+        tags = np.asarray(self.boundary_tags)
+        return {p: int(np.sum(tags == i + 1)) for i, p in enumerate(self.part_names)}
+
     def part_faces(self, name: str) -> NDArray[np.int64]:
         """Face ids of the boundary part ``name`` (an unknown name has none)."""
         if name not in self.part_names:

@@ -40,6 +40,7 @@ EXAMPLES: dict[str, str] = {
     "5.3": "ex53",
     "5.4": "ex54",
     "5.5": "ex55",
+    "3d": "ex3d",
 }
 
 #: Example number -> one-line description (``vemwear example --list``).
@@ -52,6 +53,8 @@ DESCRIPTIONS: dict[str, str] = {
     "(paper Figs. 7-9), with a Voronoi refinement study",
     "5.5": "relative errors and orders for h = k = 1/4 ... 1/64 against h = k = 1/256 "
     "(paper Tables 1 and 2)",
+    "3d": "the block in 3D: 1024 hexahedra against 1024 Voronoi polyhedra, and wear errors "
+    "for h = k = 1/2, 1/4, 1/8 against 1/16 (not in the paper)",
 }
 
 

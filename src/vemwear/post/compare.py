@@ -159,6 +159,8 @@ class Solution:
         from .results import mesh_from_arrays
 
         mesh = mesh_from_arrays(data)
+        if not isinstance(mesh, Mesh):
+            raise ValueError("comparing saved results: 2D runs only (this one is 3D)")
         t = np.asarray(data["t"])
         u = np.asarray(data["u"])
         lv = np.asarray(data["u_levels"]) if "u_levels" in data else np.arange(len(u))

@@ -33,6 +33,18 @@ def part_directions(result: Result) -> dict[str, NDArray[np.float64]]:
     return out
 
 
+def _tangent(result: Result, name: str, n: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The direction of the tangential force of a contact part: in 2D the normal turned
+    by 90 degrees; in 3D the mean (weighted) nodal tangent, the direction of the
+    foundation's tangential velocity."""
+    if len(n) == 2:
+        return np.array([-n[1], n[0]])
+    cb = result.problem.contact
+    sel = cb.part == cb.part_names.index(name)
+    tau = (cb.weights[sel, None] * cb.tangents[sel]).sum(axis=0)
+    return np.asarray(tau / max(float(np.linalg.norm(tau)), 1e-300))
+
+
 def force_table(result: Result) -> list[dict[str, Any]]:
     """Per part, at the last kept level: the resultant, and for contact parts its
     normal (compressive positive) and tangential components; for all parts the largest
@@ -53,7 +65,7 @@ def force_table(result: Result) -> list[dict[str, Any]]:
         if kind == "contact":
             n = normals[name]
             row["normal"] = float(-last @ n)
-            row["tangential"] = float(last @ np.array([-n[1], n[0]]))
+            row["tangential"] = float(last @ _tangent(result, name, n))
         rows.append(row)
     return rows
 
@@ -63,7 +75,8 @@ def plot_forces(result: Result, path: str | os.PathLike[str] | None = None) -> F
     its layer, per clamped or prescribed part the two components of its reaction."""
     from .plots import DPI
 
-    F = np.asarray(result.forces) if result.forces is not None else np.zeros((len(result.t), 0, 2))
+    d = result.problem.dim
+    F = np.asarray(result.forces) if result.forces is not None else np.zeros((len(result.t), 0, d))
     t = np.asarray(result.t)
     normals = part_directions(result)
     fig = Figure(figsize=(10.0, 4.0), layout="constrained")
@@ -73,16 +86,18 @@ def plot_forces(result: Result, path: str | os.PathLike[str] | None = None) -> F
             n = normals[name]
             ax_c.plot(t, -F[:, j] @ n, lw=1.8, label=f"{name}: normal")
             ax_c.plot(
-                t, F[:, j] @ np.array([-n[1], n[0]]), lw=1.4, ls="--", label=f"{name}: tangential"
+                t, F[:, j] @ _tangent(result, name, n), lw=1.4, ls="--", label=f"{name}: tangential"
             )
         else:
             ax_r.plot(t, F[:, j, 0], lw=1.6, label=f"{name}: $R_x$")
             ax_r.plot(t, F[:, j, 1], lw=1.6, ls="--", label=f"{name}: $R_y$")
+            if d == 3:
+                ax_r.plot(t, F[:, j, 2], lw=1.6, ls=":", label=f"{name}: $R_z$")
     ax_c.set_title("contact parts: force of the layer on the body")
     ax_r.set_title("clamped and prescribed parts: reactions")
     for ax in (ax_c, ax_r):
         ax.set_xlabel(r"time $t$")
-        ax.set_ylabel("force per unit depth")
+        ax.set_ylabel("force per unit depth" if d == 2 else "force")
         ax.grid(True, lw=0.4, alpha=0.5)
         if ax.lines:
             ax.legend(loc="best", frameon=False, fontsize=8)

@@ -10,13 +10,20 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from ..simulate import Result
 
-__all__ = ["FIGURE_NAMES", "write_outputs"]
+__all__ = ["FIGURE_NAMES", "FIGURE_NAMES_3D", "write_outputs"]
 
 #: File names of the figures written by :func:`write_outputs`.
 FIGURE_NAMES = {
     "contact_profiles": "contact_profiles.png",
     "displacement": "displacement.png",
     "deformed": "deformed.png",
+    "time_history": "time_history.png",
+    "forces": "forces.png",
+}
+#: File names of the figures of a 3D run (:mod:`vemwear.post.maps3d`).
+FIGURE_NAMES_3D = {
+    "contact_maps": "contact_maps.png",
+    "contact_line": "contact_line.png",
     "time_history": "time_history.png",
     "forces": "forces.png",
 }
@@ -38,7 +45,11 @@ def write_outputs(
     (contact profiles at ``times``, displacement and deformed mesh at the final level,
     time history; see :data:`FIGURE_NAMES`) and the ParaView series of the stored
     displacements (``solution.xdmf`` + ``solution.h5``, or ``solution.pvd`` +
-    ``solution/*.vtu``).
+    ``solution/*.vtu``). A 3D run has the figures of :data:`FIGURE_NAMES_3D` (maps of
+    ``w`` and ``u_nu - w`` over the contact face at ``times``, profiles along its middle
+    line, time history, forces) and always the PVD series of polyhedral VTU files
+    (:mod:`vemwear.post.vtk3d`: XDMF has no polyhedra that meshio or every ParaView
+    reader handles).
 
     Parameters
     ----------
@@ -67,6 +78,8 @@ def write_outputs(
     written: dict[str, list[str]] = {"data": [], "figures": [], "vtk": []}
     post.save_result(result, out, extra=extra)
     written["data"] += ["result.npz", "summary.json"]
+    if result.problem.dim == 3:
+        return _outputs3d(result, out, written, times, figures, vtk)
     if figures:
         _use_agg()
         last = len(result.t) - 1
@@ -86,6 +99,35 @@ def write_outputs(
         written["vtk"] += [xdmf.name, xdmf.with_suffix(".h5").name]
     elif vtk:
         pvd = post.write_vtk_series(result, out)
+        written["vtk"] += [os.path.relpath(pvd, out), pvd.stem]
+    return written
+
+
+def _outputs3d(
+    result: Result,
+    out: Path,
+    written: dict[str, list[str]],
+    times: Sequence[float],
+    figures: bool,
+    vtk: bool,
+) -> dict[str, list[str]]:
+    """The figures and the ParaView series of a 3D run."""
+    if figures:
+        _use_agg()
+        from .. import post
+        from .forces import plot_forces
+        from .maps3d import plot_contact_line, plot_contact_maps
+
+        tl = list(times) if len(times) else [float(result.t[-1])]
+        plot_contact_maps(result, tl, out / FIGURE_NAMES_3D["contact_maps"])
+        plot_contact_line(result, tl, out / FIGURE_NAMES_3D["contact_line"])
+        post.plot_time_history(result, out / FIGURE_NAMES_3D["time_history"])
+        plot_forces(result, out / FIGURE_NAMES_3D["forces"])
+        written["figures"] += list(FIGURE_NAMES_3D.values())
+    if vtk:
+        from .vtk3d import write_vtk_series3d
+
+        pvd = write_vtk_series3d(result, out)
         written["vtk"] += [os.path.relpath(pvd, out), pvd.stem]
     return written
 

@@ -71,7 +71,7 @@ def _fmt_nodal(v: NDArray[np.float64]) -> str:
 
 def _fmt_vstar(velocity: Any) -> str | None:
     desc = velocity.describe()
-    if isinstance(desc, list) and len(desc) == 2 and all(isinstance(c, float) for c in desc):
+    if isinstance(desc, list) and len(desc) in (2, 3) and all(isinstance(c, float) for c in desc):
         return "(" + ", ".join(f"{c:g}" for c in desc) + ")"
     return None
 

@@ -92,6 +92,17 @@ of arrays below, the one place where each array's name, shape and meaning is sta
     ``vemwear_version``         ()         version string of the writer
     ==========================  =========  ============================================
 
+    A 3D run (on a :class:`~vemwear.mesh.polyhedra.Mesh3D`) stores the same arrays with
+    three components where 2D has two (``points`` (n, 3), ``u`` (S, n, 3),
+    ``contact_points`` and ``contact_normals`` (m, 3), ``forces`` (K, P, 3)),
+    ``contact_s`` the x coordinate of the contact nodes (a surface has no arc length),
+    ``contact_weights`` the nodes' shares of the contact faces' areas, and instead of
+    ``cells_offsets`` and ``cells_vertices`` the arrays of the mesh type:
+    ``face_offsets``, ``face_vertices`` (the faces as vertex loops, CSR),
+    ``cell_offsets``, ``cell_faces``, ``cell_face_signs`` (the cells as signed faces,
+    CSR); ``boundary_tags`` are then the part codes of the boundary faces, in the
+    order of ``Mesh3D.boundary_faces``.
+
 ``summary.json``
     A JSON object with the keys ``format`` (``"vemwear-result/1"``), ``vemwear_version``,
     ``created`` (UTC, ISO 8601), ``inputs`` (``problem``: ``Problem.describe()`` with
@@ -126,6 +137,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import __version__
+from ..mesh.polyhedra import Mesh3D
 from ..mesh.polymesh import Mesh
 from ..util.atomic import atomic_file
 
@@ -145,6 +157,16 @@ __all__ = [
     "summarize",
 ]
 
+#: The cell arrays of a 3D mesh in ``result.npz`` (instead of ``cells_offsets`` and
+#: ``cells_vertices``), named as the attributes of :class:`~vemwear.mesh.polyhedra.Mesh3D`.
+MESH3D_ARRAYS = (
+    "face_offsets",
+    "face_vertices",
+    "cell_offsets",
+    "cell_faces",
+    "cell_face_signs",
+)
+
 #: File names written by :func:`save_result`.
 NPZ_NAME = "result.npz"
 SUMMARY_NAME = "summary.json"
@@ -159,12 +181,19 @@ def static_arrays(problem: Any, plan: Any) -> dict[str, NDArray[Any]]:
     mesh = problem.mesh
     cb = problem.contact
     nodal = problem.nodal
+    if isinstance(mesh, Mesh3D):
+        cells = {k: np.asarray(getattr(mesh, k), dtype=np.int64) for k in MESH3D_ARRAYS}
+        cells["cell_face_signs"] = cells["cell_face_signs"].astype(np.int8)
+    else:
+        cells = {
+            "cells_offsets": np.asarray(mesh.cell_offsets, dtype=np.int64),
+            "cells_vertices": np.asarray(mesh.cell_vertices, dtype=np.int64),
+        }
     return {
         "t": np.asarray(problem.time.t, dtype=np.float64)[plan.levels],
         "levels": np.asarray(plan.levels, dtype=np.int64),
         "points": np.asarray(mesh.points, dtype=np.float64),
-        "cells_offsets": np.asarray(mesh.cell_offsets, dtype=np.int64),
-        "cells_vertices": np.asarray(mesh.cell_vertices, dtype=np.int64),
+        **cells,
         "boundary_tags": np.asarray(mesh.boundary_tags, dtype=np.int8),
         "part_names": np.array(mesh.part_names, dtype=str),
         "u_levels": np.searchsorted(plan.levels, plan.u_levels).astype(np.int64),
@@ -446,8 +475,10 @@ def load_summary(path: str | os.PathLike[str]) -> dict[str, Any]:
         return json.load(fh)
 
 
-def mesh_from_arrays(data: Mapping[str, NDArray[Any]]) -> Mesh:
-    """Rebuild the :class:`~vemwear.mesh.Mesh` (with its boundary parts) from saved arrays.
+def mesh_from_arrays(data: Mapping[str, NDArray[Any]]) -> Mesh | Mesh3D:
+    """Rebuild the :class:`~vemwear.mesh.Mesh` or, from the arrays of a 3D run
+    (``face_offsets`` ...), the :class:`~vemwear.mesh.polyhedra.Mesh3D` (with its
+    boundary parts) from saved arrays.
 
     Parameters
     ----------
@@ -455,6 +486,18 @@ def mesh_from_arrays(data: Mapping[str, NDArray[Any]]) -> Mesh:
         The output of :func:`load_result`.
     """
     tags = data.get("boundary_tags")
+    names = [tuple(str(n) for n in data["part_names"])] if "part_names" in data else []
+    if "face_offsets" in data:
+        return Mesh3D(
+            np.asarray(data["points"]),
+            np.asarray(data["face_offsets"]),
+            np.asarray(data["face_vertices"]),
+            np.asarray(data["cell_offsets"]),
+            np.asarray(data["cell_faces"]),
+            np.asarray(data["cell_face_signs"]),
+            None if tags is None else np.asarray(tags),
+            *names,
+        )
     return Mesh(
         np.asarray(data["points"]),
         np.asarray(data["cells_offsets"]),
@@ -539,6 +582,7 @@ def result_from_arrays(
     if not np.array_equal(cn, problem.contact.nodes):
         raise ValueError("saved result: the contact nodes differ from the problem's")
     m, n = len(cn), len(pts)
+    d = int(pts.shape[1])
     shapes = {
         "wear": (L, m),
         "u_nu": (L, m),
@@ -547,7 +591,7 @@ def result_from_arrays(
         "iterations": (L,),
         "residuals": (L, 3),
         "contact_s": (m,),
-        "contact_points": (m, 2),
+        "contact_points": (m, d),
     }
     for k, shape in shapes.items():
         if np.shape(data[k]) != shape:
@@ -556,9 +600,9 @@ def result_from_arrays(
             )
     u = np.asarray(data["u"], dtype=np.float64)
     u_levels = np.asarray(data["u_levels"], dtype=np.int64)
-    if u.ndim != 3 or u.shape[1:] != (n, 2) or u.shape[0] != len(u_levels):
+    if u.ndim != 3 or u.shape[1:] != (n, d) or u.shape[0] != len(u_levels):
         raise ValueError(
-            f"saved result: array 'u' has shape {u.shape}, expected ({len(u_levels)}, {n}, 2)"
+            f"saved result: array 'u' has shape {u.shape}, expected ({len(u_levels)}, {n}, {d})"
         )
     completed = int(data["completed"]) if "completed" in data else n_grid
     if (

@@ -12,7 +12,7 @@ costs no HDF5 call of its own.
 The datasets have the names and meanings of the arrays of ``result.npz``
 (:mod:`vemwear.post.results`): the mesh and contact-node arrays, ``t`` (all L levels),
 ``levels`` (K) the levels whose rows ``wear``, ``u_nu``, ``penetration``, ``lam``, ``p``,
-``iterations``, ``residuals`` hold, and ``u`` (S, n, 2) at ``u_levels``. ``completed``
+``iterations``, ``residuals`` hold, and ``u`` (S, n, d) at ``u_levels`` (d = 2 or 3). ``completed``
 counts the finished levels once the file is closed after the run; while a run goes on
 (or after it was killed) the checkpoint next to the file says how many are final.
 """
@@ -101,9 +101,10 @@ class H5Sink:
         gap = problem.nodal["gap"]
         self.gap = gap if np.any(gap) else None
         K, S, nv = len(plan.levels), len(plan.u_levels), problem.mesh.n_points
+        d = problem.dim
         # k > 1: every dof of the stored levels (the ParaView output samples the field)
         nd = problem.discrete.n_dof if problem.order > 1 else 0
-        whole = [("u", ((S, nv, 2), None))] + ([("dofs", ((S, nd), None))] if nd else [])
+        whole = [("u", ((S, nv, d), None))] + ([("dofs", ((S, nd), None))] if nd else [])
         shapes: dict[str, tuple[tuple[int, ...], Any]] = {
             "wear": ((K, m), np.float64),
             "u_nu": ((K, m), np.float64),
@@ -112,7 +113,7 @@ class H5Sink:
             "p": ((K, m), np.float64),
             "iterations": ((K,), np.int64),
             "residuals": ((K, 3), np.float64),
-            "forces": ((K, len(problem.discrete.force_parts), 2), np.float64),
+            "forces": ((K, len(problem.discrete.force_parts), d), np.float64),
         }
         if resume:
             self.file = h5py.File(self.path, "r+")

@@ -48,7 +48,7 @@ def smallness_report(problem: Problem, max_dofs: int = 200_000) -> tuple[str, st
     warning : str or None
         A warning when the condition is doubtful (estimate >= 1), else None.
     """
-    if 2 * problem.mesh.n_points > max_dofs:
+    if problem.dim * problem.mesh.n_points > max_dofs:
         return f"not estimated (more than {max_dofs} dofs)", None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -73,21 +73,51 @@ def smallness_report(problem: Problem, max_dofs: int = 200_000) -> tuple[str, st
 
 def check_rows(cfg: Config) -> Rows:
     """The description of a validated configuration that ``vemwear check`` prints."""
-    from ..solvers import resolve_backend
-
     pr = cfg.problem
+    if pr.dim == 3:
+        return _check_rows3d(cfg)
     m = pr.mesh
     cb = pr.contact
     counts = ", ".join(f"{n}-gons: {len(i)}" for n, (i, _) in sorted(m.groups.items()))
     parts = ", ".join(f"{p} {n}" for p, n in m.part_counts().items() if n)
-    k = pr.time.k
+    mesh_from = _mesh_from(cfg)
+    edges, lengths = 0, 0.0
+    for pc in pr.parts:
+        ce = m.part_edges(pc.part)
+        edges += len(ce)
+        lengths += float(np.linalg.norm(m.points[ce[:, 1]] - m.points[ce[:, 0]], axis=1).sum())
+    contact_rows = _contact_rows(pr)
+    return [
+        (
+            "mesh",
+            f"{mesh_from}: {m.n_points} vertices, {m.n_cells} cells ({counts}), h = {m.h:.4g}",
+        ),
+        ("boundary edges", parts),
+        ("held by", "; ".join(_held(pr))),
+        ("contact nodes", f"{cb.m} on {edges} contact edges (Gamma_C length {lengths:.6g})"),
+        *_common_rows(cfg, contact_rows),
+    ]
+
+
+def _mesh_from(cfg: Config) -> str:
     src = cfg.mesh_source
-    mesh_from = (
-        f"file {src['file']}"
-        if "file" in src
-        else f"generator {src.get('generator')} ({src.get('function')})"
-    )
-    nodal = pr.nodal
+    if "file" in src:
+        return f"file {src['file']}"
+    return f"generator {src.get('generator')} ({src.get('function')})"
+
+
+def _held(pr: Problem) -> list[str]:
+    con = pr.constraints
+    return [f"{n} (u = 0)" for n in con.parts[: con.n_clamped]] + [
+        f"{d.part} ("
+        + ", ".join(f"{c} = {v}" for c, v in d.describe().items() if c != "part" and v is not None)
+        + ")"
+        for d in pr.displacement
+    ]
+
+
+def _contact_rows(pr: Problem) -> Rows:
+    cb, nodal = pr.contact, pr.nodal
 
     def rng(name: str, sel: np.ndarray) -> str:
         v = nodal[name][sel]
@@ -103,37 +133,53 @@ def check_rows(cfg: Config) -> Rows:
             return f"p: table of {len(law['r'])} points, r up to {law['r'][-1]:g}"
         return f"p: {law}"
 
-    contact_rows: list[tuple[str, str]] = []
-    edges, lengths = 0, 0.0
+    rows = []
     for i, pc in enumerate(pr.parts):
         sel = np.asarray(cb.part == i)
-        ce = m.part_edges(pc.part)
-        edges += len(ce)
-        lengths += float(np.linalg.norm(m.points[ce[:, 1]] - m.points[ce[:, 0]], axis=1).sum())
         gap = f"; gap {rng('gap', sel)}" if np.any(nodal["gap"][sel]) else ""
-        contact_rows.append(
+        rows.append(
             (
                 "contact" if len(pr.parts) == 1 else f"contact {pc.part}",
                 f"{law_text(pc.p.describe())}; g {rng('g', sel)}; mu {rng('mu', sel)}; "
                 f"kappa {rng('kappa', sel)}{gap}; v_star {pc.velocity.describe()}",
             )
         )
-    con = pr.constraints
-    held = [f"{n} (u = 0)" for n in con.parts[: con.n_clamped]] + [
-        f"{d.part} ("
-        + ", ".join(f"{c} = {v}" for c, v in d.describe().items() if c != "part" and v is not None)
-        + ")"
-        for d in pr.displacement
-    ]
-    s = cfg.solver
+    return rows
+
+
+def _check_rows3d(cfg: Config) -> Rows:
+    """:func:`check_rows` of a 3D problem: faces instead of edges."""
+    pr = cfg.problem
+    m = pr.mesh
+    nf = np.diff(m.cell_offsets)
+    counts = ", ".join(f"{n} faces: {int(np.sum(nf == n))}" for n in np.unique(nf))
+    h = float(m.cell_diameters.max())
+    parts = ", ".join(f"{p} {len(m.part_faces(p))}" for p in m.part_names if len(m.part_faces(p)))
+    faces = np.concatenate([m.part_faces(pc.part) for pc in pr.parts])
+    area = float(m.face_areas[faces].sum())
     return [
         (
             "mesh",
-            f"{mesh_from}: {m.n_points} vertices, {m.n_cells} cells ({counts}), h = {m.h:.4g}",
+            f"{_mesh_from(cfg)}: 3D, {m.n_points} vertices, {m.n_cells} cells ({counts}), "
+            f"h = {h:.4g}",
         ),
-        ("boundary edges", parts),
-        ("held by", "; ".join(held)),
-        ("contact nodes", f"{cb.m} on {edges} contact edges (Gamma_C length {lengths:.6g})"),
+        ("boundary faces", parts),
+        ("held by", "; ".join(_held(pr))),
+        (
+            "contact nodes",
+            f"{pr.contact.m} on {len(faces)} contact faces (Gamma_C area {area:.6g})",
+        ),
+        *_common_rows(cfg, _contact_rows(pr)),
+    ]
+
+
+def _common_rows(cfg: Config, contact_rows: Rows) -> Rows:
+    from ..solvers import resolve_backend
+
+    pr = cfg.problem
+    k = pr.time.k
+    s = cfg.solver
+    return [
         (
             "time levels",
             f"{len(pr.time.t)} on [0, {pr.time.T:g}], "
@@ -222,7 +268,10 @@ def _force_rows(result: Result) -> Rows:
     return [
         (
             f"force at T: {name}",
-            f"({F[-1, j, 0]:.4g}, {F[-1, j, 1]:.4g})" + (" reaction" if kind == "reaction" else ""),
+            "("
+            + ", ".join(f"{v:.4g}" for v in F[-1, j])
+            + ")"
+            + (" reaction" if kind == "reaction" else ""),
         )
         for j, (name, kind) in enumerate(result.force_parts)
     ]

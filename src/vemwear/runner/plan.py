@@ -8,12 +8,19 @@
   factorization of the stiffness, about ``250 N log2 N`` bytes for N unknowns (nested
   dissection in 2D; measured with ``/usr/bin/time`` on rectangles of 64 x 32 to
   512 x 256 cells: 167, 197, 439 and 826 MB peak against 173, 219, 426 and 1347 MB
-  estimated, within a factor 2 everywhere); 24 bytes per time level (the time grid and
+  estimated, within a factor 2 everywhere); in 3D (3 unknowns per vertex) the fill-in
+  of nested dissection grows as ``N^(4/3)``, not ``N log N``: about ``450 N^(4/3)``
+  bytes with PARDISO and ``1300 N^(4/3)`` with SciPy's SuperLU (measured on hexahedra
+  of the 2 x 1 x 1 box, 16 x 8 x 8, 32 x 16 x 16 and 48 x 24 x 24 cells, N = 4131,
+  28611 and 91875: PARDISO 134, 500 and 1869 MB peak, SuperLU 152, 1171 and 5474 MB,
+  against 130, 494 and 1967 MB and 186, 1238 and 5491 MB estimated with a base of 100
+  MB); 24 bytes per time level (the time grid and
   the level tables); the dense inverse of the contact block, ``3 * 8 m^2``; and, when
   the run ends, the kept arrays in memory for ``result.npz`` (twice: read and written);
 * disk: ``result.h5`` (the kept contact rows, ``7 * 8 m`` bytes each, and the stored
-  displacements, ``16 n`` bytes each), ``result.npz`` (as much again), and the ParaView
-  series (about ``16 n + 160 C`` bytes per stored displacement).
+  displacements, ``8 d n`` bytes each), ``result.npz`` (as much again), and the ParaView
+  series (about ``16 n + 160 C`` bytes per stored displacement; ``24 n + 560 C`` in 3D:
+  the polyhedra's faces and the 3 x 3 tensors).
 
 Two checks, one rule: a run is refused (exit 2, with the numbers, unless
 ``--force-size``) when its estimate exceeds the machine's available memory or the free
@@ -26,7 +33,8 @@ Before they are built (:func:`vemwear.config.load_config`'s ``admit`` hook,
 :func:`admit_sizes`), a rough check runs on sizes read from the configuration alone, each
 a lower bound of the real one: the levels from ``[time]`` (exact), the cells the
 generator makes (0 for a mesh file, not known before it is read), ``C/2 + 1`` vertices
-for C cells (Euler's formula: no polygonal mesh has fewer), 2 contact nodes, ``ceil(L /
+for C cells (Euler's formula: no polygonal mesh has fewer; ``C/6 + 4`` in 3D, the
+vertices of Kuhn tetrahedra, with PARDISO's smaller factor), 2 contact nodes, ``ceil(L /
 every)`` kept rows and the stored displacements that ``store_u`` certainly asks for. The
 estimate grows with every size (and the memory this process holds only grows
 meanwhile), so the rough estimate is at most the real-mesh one: it
@@ -71,6 +79,8 @@ def base_memory() -> float:
 
 
 _FACTOR = 250.0
+#: Bytes per ``N^(4/3)`` of the factorization in 3D, by resolved backend.
+_FACTOR_3D = {"pardiso": 450.0, "scipy": 1300.0}
 
 
 class PlanError(ValueError):
@@ -105,6 +115,8 @@ def estimate(
     paraview: bool,
     npz: bool = True,
     base: float | None = None,
+    dim: int = 2,
+    backend: str = "pardiso",
 ) -> Estimate:
     """Peak memory and disk of a run (the model of the module docstring).
 
@@ -122,32 +134,44 @@ def estimate(
         Whether ``result.npz`` is written (its arrays are then held in memory).
     base : float, optional
         The memory before the run's arrays; :func:`base_memory` by default.
+    dim : int
+        2 or 3: the dimension of the mesh (3 unknowns per vertex and more fill-in in 3D).
+    backend : str
+        The resolved sparse backend (``pardiso`` or ``scipy``; 3D only).
     """
-    n = max(2 * points, 2)
+    n = max(dim * points, 2)
     rows = kept * (7 * 8 * contact + 32)
-    disp = stored_u * 16 * points
+    disp = stored_u * 8 * dim * points
     arrays = rows + disp
+    factor = (
+        _FACTOR * n * math.log2(n)
+        if dim == 2
+        else _FACTOR_3D.get(backend, _FACTOR_3D["scipy"]) * float(n) ** (4 / 3)
+    )
+    vtk = 16 * points + 160 * cells if dim == 2 else 24 * points + 560 * cells
     memory = (
         (base_memory() if base is None else base)
-        + _FACTOR * n * math.log2(n)
+        + factor
         + 24 * levels
         + 24 * float(contact) ** 2
         + (2 * arrays if npz else 0)
     )
-    disk = arrays * (2 if npz else 1) + (stored_u * (16 * points + 160 * cells) if paraview else 0)
+    disk = arrays * (2 if npz else 1) + (stored_u * vtk if paraview else 0)
     return Estimate(float(memory), float(disk))
 
 
 def _estimate_sizes(sizes: Sizes) -> Estimate:
     """The rough estimate: every size at its lower bound (the module docstring)."""
+    three = sizes.dim == 3
     return estimate(
         levels=sizes.levels,
-        points=sizes.cells // 2 + 1,
+        points=sizes.cells // 6 + 4 if three else sizes.cells // 2 + 1,
         cells=sizes.cells,
         contact=2,
         kept=sizes.kept,
         stored_u=sizes.stored_u,
         paraview=sizes.paraview,
+        dim=sizes.dim,
     )
 
 
@@ -206,6 +230,8 @@ def admit_sizes(
 def estimate_config(cfg: Config, *, base: float | None = None) -> Estimate:
     """The estimate of a validated configuration, from its real mesh and time grid
     (``base`` as in :func:`estimate`)."""
+    from ..solvers import resolve_backend
+
     out = cfg.output
     pr = cfg.problem
     L = len(pr.time.t)
@@ -222,4 +248,6 @@ def estimate_config(cfg: Config, *, base: float | None = None) -> Estimate:
         stored_u=stored,
         paraview=out.vtk,
         base=base,
+        dim=pr.dim,
+        backend=resolve_backend(cfg.solver.backend) if pr.dim == 3 else "pardiso",
     )

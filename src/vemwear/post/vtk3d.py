@@ -1,0 +1,120 @@
+"""ParaView output of a 3D run: a PVD collection of VTU files with polyhedron cells.
+
+meshio's XDMF writer has no general polyhedra (and XDMF's own ``Polyhedron`` topology is
+not read by every ParaView reader), so a 3D run is always written as
+``<name>.pvd`` + ``<name>/<name>_NNNN.vtu``, one VTU file per stored level, through
+:func:`vemwear.mesh.io3d.write_mesh3d` (VTK polyhedron cells, faces listed outward; the
+boundary parts as field data). Point data: ``displacement`` (3 components), ``wear``,
+``u_nu``, ``penetration``, ``lam``, ``p``, ``contact`` (1 on the contact nodes; the
+contact quantities are 0 elsewhere); cell data: ``strain`` and ``stress`` (3x3 tensors of
+the projection ``Pi u``, ``sigma = 2 eta eps + lam tr(eps) I``), ``von_mises`` and
+``cell_id``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterable
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..mesh.io3d import write_mesh3d
+from ..util.atomic import atomic_file, write_atomic
+from .vtk import _levels, _pvd_text
+
+if TYPE_CHECKING:
+    from ..simulate.loop import Result
+
+__all__ = ["level_fields3d", "write_vtk_series3d"]
+
+
+def level_fields3d(
+    result: Result, level: int
+) -> tuple[dict[str, NDArray[np.float64]], dict[str, NDArray[np.float64]]]:
+    """The point data and the cell data (in cell order) of one stored level of a 3D run."""
+    pr = result.problem
+    n = pr.mesh.n_points
+    nodes = np.asarray(result.contact_nodes)
+    u = np.asarray(result.displacement(level), dtype=float)
+    point_data: dict[str, NDArray[np.float64]] = {"displacement": u}
+    for key, arr in (
+        ("wear", result.wear),
+        ("u_nu", result.u_nu),
+        ("penetration", result.penetration),
+        ("lam", result.p_rigid),
+        ("p", result.p_soft),
+    ):
+        full = np.zeros(n)
+        full[nodes] = np.asarray(arr[level])
+        point_data[key] = full
+    contact = np.zeros(n)
+    contact[nodes] = 1.0
+    point_data["contact"] = contact
+    E = pr.space.projection(pr.material, u).strain  # type: ignore[union-attr, arg-type]
+    lam, eta = pr.material.lam, pr.material.eta
+    tr = np.trace(E, axis1=1, axis2=2)
+    S = 2.0 * eta * E + lam * tr[:, None, None] * np.eye(3)
+    d = S - np.trace(S, axis1=1, axis2=2)[:, None, None] * np.eye(3) / 3.0
+    vm = np.sqrt(1.5 * np.einsum("kij,kij->k", d, d))
+    cells = {"strain": E.reshape(-1, 9), "stress": S.reshape(-1, 9), "von_mises": vm}
+    return point_data, cells
+
+
+def write_vtk_series3d(
+    result: Result,
+    outdir: str | os.PathLike[str],
+    levels: Iterable[int] | None = None,
+    name: str = "solution",
+) -> Path:
+    """Write a 3D run as a ParaView time series of polyhedral VTU files.
+
+    As :func:`vemwear.post.vtk.write_vtk_series`: ``outdir/<name>/<name>_NNNN.vtu`` for
+    every chosen level and the collection ``outdir/<name>.pvd``, written last under a
+    temporary name; stale ``<name>_<digits>.vtu`` files removed.
+
+    Parameters
+    ----------
+    result : Result
+        A run on a :class:`~vemwear.mesh.polyhedra.Mesh3D`.
+    outdir : path
+        Output directory; created if missing.
+    levels : iterable of int, optional
+        Rows of the result to write (each with a stored displacement); default: every
+        row in ``result.u_levels``.
+    name : str
+        Base name of the series.
+
+    Returns
+    -------
+    Path
+        The ``.pvd`` file.
+    """
+    if not name or os.sep in name or (os.altsep and os.altsep in name):
+        raise ValueError(f"vtk: series name must be a plain file name, got {name!r}")
+    out = Path(outdir)
+    sub = out / name
+    sub.mkdir(parents=True, exist_ok=True)
+    mesh = result.problem.mesh
+    L = len(result.t)
+    chosen = [int(v) for v in result.u_levels] if levels is None else _levels(levels, L)
+    width = max(4, len(str(L - 1)))
+    entries: list[tuple[float, str]] = []
+    written: set[str] = set()
+    for lv in chosen:
+        point_data, cell_data = level_fields3d(result, lv)
+        fname = f"{name}_{lv:0{width}d}.vtu"
+        with atomic_file(sub / fname) as tmp:
+            write_mesh3d(mesh, tmp, point_data, cell_data)  # type: ignore[arg-type]
+        written.add(fname)
+        entries.append((float(result.t[lv]), f"{name}/{fname}"))
+    pattern = re.compile(re.escape(name) + r"_\d+\.vtu")
+    for stale in sub.iterdir():
+        if stale.is_file() and pattern.fullmatch(stale.name) and stale.name not in written:
+            stale.unlink()
+    pvd = out / f"{name}.pvd"
+    write_atomic(pvd, _pvd_text(entries))
+    return pvd
