@@ -21,6 +21,7 @@ from meshes3d import (
     prisms,
     projective,
 )
+from vemwear.mesh.voronoi3d import box_voronoi
 from vemwear.vem.local import STABILIZATIONS, Material
 from vemwear.vem.local3d import (
     Projection3D,
@@ -67,6 +68,7 @@ def meshes(seed: int = 0):
         "prisms-nonconvex": projective(prisms("nonconvex", (3, 3), _heights(rng, 3)), rng, 0.05),
         "prisms-voronoi": prisms("voronoi", 16, _heights(rng, 3)),
         "hull": hull_cell(rng),
+        "voronoi3d": box_voronoi((1.0, 1.0, 1.0), 40, seed=1),
     }
 
 
@@ -238,7 +240,9 @@ def _solve(K, F, fixed, values):
 
 @pytest.mark.parametrize("stabilization", STABILIZATIONS)
 @pytest.mark.parametrize("rule", FACE_RULES)
-@pytest.mark.parametrize("name", ["hexahedra", "tetrahedra", "prisms-nonconvex", "prisms-voronoi"])
+@pytest.mark.parametrize(
+    "name", ["hexahedra", "tetrahedra", "prisms-nonconvex", "prisms-voronoi", "voronoi3d"]
+)
 def test_patch_test_prescribed_boundary(name, rule, stabilization):
     """A linear field prescribed at every boundary vertex, f1 = 0: exact everywhere."""
     mesh = MESHES[name]
@@ -252,7 +256,9 @@ def test_patch_test_prescribed_boundary(name, rule, stabilization):
 
 
 @pytest.mark.parametrize("rule", FACE_RULES)
-@pytest.mark.parametrize("name", ["hexahedra", "tetrahedra", "prisms-nonconvex", "prisms-voronoi"])
+@pytest.mark.parametrize(
+    "name", ["hexahedra", "tetrahedra", "prisms-nonconvex", "prisms-voronoi", "voronoi3d"]
+)
 def test_patch_test_tractions(name, rule):
     """A linear field prescribed on the side zmin only, its tractions sigma nu on every
     other boundary face (each face by the face vertex weights): exact everywhere."""
@@ -362,6 +368,7 @@ FAMILIES3D = {
         lambda n: prisms("nonconvex", (n, n), np.linspace(0, 1, n + 1)),
         (4, 8, 12),
     ),
+    "voronoi3d": (lambda n: box_voronoi((1.0, 1.0, 1.0), n**3, seed=0), (4, 6, 9)),
 }
 
 
@@ -371,7 +378,10 @@ def test_manufactured_orders(family):
     the errors of Pi u_h decrease as h (H1 seminorm) and h^2 (L2) on the last two levels.
     On prisms of chevrons the L2 order falls towards 1, as in 2D (docs/paper.md: the
     vertex average is an O(h) shift from the centroid in every cell, so the load's
-    consistency error does not average out); there only L2 order >= 1 is asserted."""
+    consistency error does not average out); there only L2 order >= 1 is asserted. On
+    clipped 3D Voronoi cells the L2 order rises towards 2 (1.29, then 1.62 on n^3 cells,
+    n = 4, 6, 9; 1.41, then 1.72 on n = 4, 8, 12: the same vertex-average shift, on cells
+    with up to 24 vertices); there >= 1.5 is asserted."""
     u, grad, f = _manufactured()
     make, ns = FAMILIES3D[family]
     errs = np.array([_errors(make(n), u, grad, f) for n in ns])
@@ -379,7 +389,8 @@ def test_manufactured_orders(family):
     print(family, errs.tolist(), orders.tolist())
     l2, h1 = orders[-1]
     assert 0.9 < h1 < 1.2
-    assert (1.0 if family == "prisms-nonconvex" else 1.75) < l2 < 2.3
+    low = {"prisms-nonconvex": 1.0, "voronoi3d": 1.5}.get(family, 1.75)
+    assert low < l2 < 2.3
 
 
 def test_elasticity_matrix():
