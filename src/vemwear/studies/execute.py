@@ -67,14 +67,17 @@ class RunFailed(RuntimeError):
 #: MALLOC_TRIM_THRESHOLD_=65536, which returns freed memory to the system at once; a run
 #: allocates and frees large arrays at every step, and with that setting each one becomes
 #: an mmap, page faults and an munmap (measured on 2 cores: a run on 128 x 64 cells took
-#: 2.1 times as long in a worker as in a plain process). BLAS and OpenMP stay at one
-#: thread per worker (one worker per core).
+#: 2.1 times as long in a worker as in a plain process). Dask's statistical profiler
+#: samples every task's stack each 10 ms, holding the GIL: off (a run on 128 x 64 cells
+#: took 122-127 ms in a worker without it, 244-261 ms with it, on the loaded machine).
+#: BLAS and OpenMP stay at one thread per worker (one worker per core).
 LOCAL_WORKERS: dict[str, Any] = {
     "distributed.nanny.pre-spawn-environ": {
         "OMP_NUM_THREADS": 1,
         "MKL_NUM_THREADS": 1,
         "OPENBLAS_NUM_THREADS": 1,
     },
+    "distributed.worker.profile.enabled": False,
 }
 
 
