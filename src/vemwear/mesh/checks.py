@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -208,9 +211,33 @@ def check_boundary(mesh: Mesh, require: tuple[str, ...] = ("clamped",)) -> None:
             raise MeshError(f"the mesh has no {name!r} boundary edges")
 
 
+#: Digests of the geometries that passed the checks of vertices, cells and conformity
+#: (the last few: runs of a study build the same mesh again and again).
+_PASSED: OrderedDict[bytes, None] = OrderedDict()
+
+
+def _geometry_digest(mesh: Mesh) -> bytes:
+    h = hashlib.blake2b(digest_size=20)
+    for a in (mesh.points, mesh.cell_offsets, mesh.cell_vertices):
+        h.update(str((a.dtype.str, a.shape)).encode())
+        h.update(np.ascontiguousarray(a).data)
+    return h.digest()
+
+
 def check_mesh(mesh: Mesh, require: tuple[str, ...] = ("clamped",)) -> None:
-    """Run every check: vertices, cells, conformity and boundary parts."""
-    check_vertices(mesh)
-    check_cells(mesh)
-    check_conforming(mesh)
+    """Run every check: vertices, cells, conformity and boundary parts.
+
+    The first three depend on the geometry alone; a geometry that passed them is
+    recognised by a digest of its arrays and not checked again.
+    """
+    key = _geometry_digest(mesh)
+    if key in _PASSED:
+        _PASSED.move_to_end(key)
+    else:
+        check_vertices(mesh)
+        check_cells(mesh)
+        check_conforming(mesh)
+        _PASSED[key] = None
+        while len(_PASSED) > 8:
+            _PASSED.popitem(last=False)
     check_boundary(mesh, require)
