@@ -73,11 +73,18 @@ def _coord(values: list[Any]) -> NDArray[Any]:
     return np.asarray([v if isinstance(v, str) else json.dumps(v) for v in values], dtype=str)
 
 
+#: Arrays of result.npz the Dataset does not use: the mesh and the displacements (the
+#: bulk of a run's file).
+_SKIP = ("u", "dofs", "points", "boundary_tags")
+_SKIP_PREFIXES = ("cell_", "face_")
+
+
 def _load(out: Path, rid: str) -> dict[str, NDArray[Any]] | None:
-    from ..post.results import load_result
+    from ..post.results import NPZ_NAME
 
     try:
-        return load_result(out / RUNS_DIR / rid)
+        with np.load(out / RUNS_DIR / rid / NPZ_NAME, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files if k not in _SKIP and not k.startswith(_SKIP_PREFIXES)}
     except (OSError, ValueError):
         return None
 
@@ -225,7 +232,8 @@ def _profiles(
     parts = [tuple(str(x) for x in r.get("force_parts", ())) for r in results.values()]
     if parts and parts[0] and all(p == parts[0] for p in parts):
         coords["part"] = ("part", np.asarray(parts[0], dtype=str))
-        coords["component"] = ("component", np.asarray(["x", "y"], dtype=str))
+        dim = next(iter(results.values()))["forces"].shape[-1]
+        coords["component"] = ("component", np.asarray(["x", "y", "z"][:dim], dtype=str))
         arr = np.full((*shape, t.size, len(parts[0]), 2), np.nan)
         for rid, res in results.items():
             arr[where(by_id[rid].index)] = _interp(t, res["t"], res["forces"], axis=0)
