@@ -6,9 +6,19 @@ small_config``); pytest puts this directory on ``sys.path``.
 
 from __future__ import annotations
 
+import importlib
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from pathlib import Path
 from typing import Any
+
+import numpy as np
+import pytest
+
+from vemwear.solvers.system import ConvergenceError
+
+# the module, not a name the package may export under the same name
+levels_mod = importlib.import_module("vemwear.simulate.levels")
 
 # The data of Example 5.2 on a coarse mesh of squares. A key set to None is
 # optional: left out unless a test sets it, so that every key keeps its place
@@ -74,3 +84,34 @@ def small_config(
         if body:
             lines += [f"[{name}]", *body]
     return "\n".join(lines) + "\n"
+
+
+@pytest.fixture
+def stop_at(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[..., None]]:
+    """``stop_at(level)`` makes the next runs stop with a solver failure (exit 3) at
+    time level ``level``, as a run that did not converge there; ``stop_at(None)`` undoes
+    it. In-process, for tests of ``--resume``."""
+    real = levels_mod.run_levels
+
+    def install(level: int | None) -> None:
+        if level is None:
+            monkeypatch.setattr(levels_mod, "run_levels", real)
+            return
+
+        def patched(*args: object, **kwargs: object) -> object:
+            def cb(n: int, _sol: object) -> None:
+                if n == level:
+                    raise ConvergenceError(f"stopped at time level {level} (test)")
+
+            kwargs["callback"] = cb
+            return real(*args, **kwargs)  # type: ignore[arg-type]
+
+        monkeypatch.setattr(levels_mod, "run_levels", patched)
+
+    yield install
+
+
+def npz_arrays(out: Path) -> dict[str, np.ndarray]:
+    """Every array of ``out/result.npz``."""
+    with np.load(out / "result.npz", allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}

@@ -4,15 +4,14 @@ order against k = 1, configuration, CLI and resume (docs/method.md, section 9)."
 
 from __future__ import annotations
 
-import importlib
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from conftest import small_config
+from conftest import npz_arrays, small_config
 from test_closed_forms import K_S, KAPPA, W, block
 from test_solvers import paper_problem, rel
 from vemwear.cli.main import main
@@ -24,12 +23,9 @@ from vemwear.paper import ex52
 from vemwear.paper.manufactured import convergence_study
 from vemwear.post.norms import contact_l2_norm
 from vemwear.simulate import Prescribed, Problem, SolverOptions, TimeGrid, simulate
-from vemwear.solvers import ConvergenceError
 from vemwear.util.hashing import sha256_json
 from vemwear.vem import Material
 from vemwear.vem.dofs2 import interpolate2
-
-levels_mod = importlib.import_module("vemwear.simulate.levels")
 
 
 @pytest.fixture(scope="module")
@@ -212,33 +208,6 @@ def config(tmp_path: Path) -> Path:
     return p
 
 
-@pytest.fixture
-def stop_at(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[..., None]]:
-    real = levels_mod.run_levels
-
-    def install(level: int | None) -> None:
-        if level is None:
-            monkeypatch.setattr(levels_mod, "run_levels", real)
-            return
-
-        def patched(*args: object, **kwargs: object) -> object:
-            def cb(n: int, _sol: object) -> None:
-                if n == level:
-                    raise ConvergenceError(f"stopped at time level {level} (test)")
-
-            kwargs["callback"] = cb
-            return real(*args, **kwargs)  # type: ignore[arg-type]
-
-        monkeypatch.setattr(levels_mod, "run_levels", patched)
-
-    yield install
-
-
-def _arrays(d: Path) -> dict[str, np.ndarray]:
-    with np.load(d / "result.npz", allow_pickle=False) as z:
-        return {k: z[k] for k in z.files}
-
-
 def test_config_order_2(config: Path) -> None:
     cfg = load_config(config)
     assert cfg.problem.order == 2
@@ -249,7 +218,7 @@ def test_run_and_resume_k2_bitwise(
 ) -> None:
     ref = tmp_path / "ref"
     assert main(["run", str(config), "-o", str(ref), "--no-progress"]) == 0
-    a = _arrays(ref)
+    a = npz_arrays(ref)
     assert np.any(a["contact_nodes"] >= len(a["points"]))  # the midpoints
     assert a["u"].shape[1:] == a["points"].shape
     out = tmp_path / "out"
@@ -259,7 +228,7 @@ def test_run_and_resume_k2_bitwise(
     capsys.readouterr()
     assert main(["run", str(config), "-o", str(out), "--no-progress", "--resume"]) == 0
     assert "resumed from level 36" in capsys.readouterr().out
-    b = _arrays(out)
+    b = npz_arrays(out)
     for k in ("u", "dofs", "wear", "u_nu", "lam", "p", "iterations", "residuals"):
         assert np.array_equal(a[k], b[k]), k
     assert np.array_equal(a["contact_nodes"], b["contact_nodes"])
@@ -296,7 +265,7 @@ def test_run_writes_the_refined_paraview_series_k2(config: Path, tmp_path: Path)
     assert len(pts) == mesh.n_points + n_edges + mesh.n_cells
     assert [c.type for c in cells] == ["triangle"]
     u_pts = next(v for k, v in point_data.items() if np.shape(v)[-1] in (2, 3))
-    assert np.array_equal(u_pts[: mesh.n_points, :2], _arrays(out)["u"][-1])
+    assert np.array_equal(u_pts[: mesh.n_points, :2], npz_arrays(out)["u"][-1])
 
 
 @pytest.mark.parametrize("method", ["newton", "newton-full"])

@@ -4,14 +4,14 @@ for bad 3D inputs, the 2D side aliases, and `vemwear example 3d --quick`."""
 
 from __future__ import annotations
 
-import importlib
 import json
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from conftest import npz_arrays
 from vemwear.cli.main import main
 from vemwear.config import ConfigError, load_config, parse_config
 from vemwear.mesh.io3d import write_mesh3d
@@ -19,9 +19,6 @@ from vemwear.mesh.polyhedra import Mesh3D
 from vemwear.post import load_result
 from vemwear.post.results import mesh_from_arrays, result_from_arrays
 from vemwear.simulate import simulate
-from vemwear.solvers import ConvergenceError
-
-levels_mod = importlib.import_module("vemwear.simulate.levels")
 
 CONFIG = """
 title = "3d small"
@@ -65,33 +62,6 @@ def _write(tmp_path: Path, text: str, name: str = "bad.toml") -> Path:
     p = tmp_path / name
     p.write_text(text)
     return p
-
-
-@pytest.fixture
-def stop_at(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[..., None]]:
-    real = levels_mod.run_levels
-
-    def install(level: int | None) -> None:
-        if level is None:
-            monkeypatch.setattr(levels_mod, "run_levels", real)
-            return
-
-        def patched(*args: object, **kwargs: object) -> object:
-            def cb(n: int, _sol: object) -> None:
-                if n == level:
-                    raise ConvergenceError(f"stopped at time level {level} (test)")
-
-            kwargs["callback"] = cb
-            return real(*args, **kwargs)  # type: ignore[arg-type]
-
-        monkeypatch.setattr(levels_mod, "run_levels", patched)
-
-    yield install
-
-
-def _arrays(d: Path) -> dict[str, np.ndarray]:
-    with np.load(d / "result.npz", allow_pickle=False) as z:
-        return {k: z[k] for k in z.files}
 
 
 # ----------------------------------------------------------------------------- check, run
@@ -140,7 +110,7 @@ def test_stopped_3d_run_resumes_bitwise(
     capsys.readouterr()
     assert main(["run", str(config), "-o", str(out), "--no-progress", "--resume"]) == 0
     assert "resumed from level 5" in capsys.readouterr().out
-    a, b = _arrays(ref), _arrays(out)
+    a, b = npz_arrays(ref), npz_arrays(out)
     for k in ("u", "wear", "u_nu", "lam", "p", "iterations", "residuals", "forces"):
         assert np.array_equal(a[k], b[k]), k
 
