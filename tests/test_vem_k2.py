@@ -354,6 +354,37 @@ def test_stiffness2_equals_reference_assembly(family, opts, stab):
     assert (A - A.T).count_nonzero() == 0
 
 
+@pytest.mark.parametrize("pack_bits", [64, 0])
+@pytest.mark.parametrize(
+    ("family", "opts"),
+    [
+        ("voronoi", {"size": (2.0, 1.0), "n_cells": 200, "seed": 5}),
+        ("hanging", {"size": (1.0, 1.0), "divisions": (4, 3)}),
+    ],
+)
+def test_stiffness2_batches_and_argsort_pattern(monkeypatch, family, opts, pack_bits):
+    """Small batches (partial last batches reuse the buffers with their constant entries),
+    key, sort and column blocks (equal keys across blocks), and, with ``PACK_BITS = 0``,
+    the argsort that meshes too large for the packed sort keys take (about 110,000 Voronoi
+    cells and up): the reference matrix as well."""
+    import vemwear.vem.dofs2 as dofs2
+    import vemwear.vem.local2 as local2
+
+    mesh = mesh_of(family, **opts)
+    R = reference_stiffness2(mesh, MAT, "trace")
+    monkeypatch.setattr(dofs2, "PACK_BITS", pack_bits)
+    monkeypatch.setattr(dofs2, "CHUNK", 7)
+    monkeypatch.setattr(dofs2, "_KEY_BLOCK", 5)
+    monkeypatch.setattr(dofs2, "_SORT_BLOCK", 13)
+    monkeypatch.setattr(local2, "_COLUMNS", 40)
+    A = stiffness2(mesh, MAT, "trace")
+    A.check_format(full_check=True)
+    assert A.has_canonical_format
+    assert np.array_equal(A.indptr, R.indptr) and np.array_equal(A.indices, R.indices)
+    assert np.abs(A.data - R.data).max() <= 1e-12 * np.abs(R.data).max()
+    assert (A - A.T).count_nonzero() == 0
+
+
 # ----------------------------------------------------------------------------- loads
 def test_edge_shape_functions():
     s = np.linspace(0, 1, 7)

@@ -15,6 +15,7 @@ conforming without any special treatment.
 
 from __future__ import annotations
 
+import sys
 from typing import NamedTuple
 
 import numpy as np
@@ -128,7 +129,7 @@ class _Pattern(NamedTuple):
 
     indptr: NDArray[np.int64]
     indices: NDArray[np.int32]
-    bpos: NDArray[np.int64]  # block (2 x 2) position of every local node pair, cell by cell
+    bpos: NDArray[np.signedinteger]  # block (2 x 2) position of every local node pair, cell by cell
     bptr: NDArray[np.int64]  # block row starts (per node)
 
 
@@ -147,67 +148,125 @@ def _cell_nodes(mesh: Mesh) -> list[tuple[NDArray[np.int64], NDArray[np.int64]]]
     return out
 
 
+#: Bits of the packed sort keys in :func:`_pattern`: the node pair and the entry index are
+#: packed into one integer when they fit in this many bits (one in-place sort, no argsort);
+#: larger meshes (about 110,000 Voronoi cells and up) take the argsort.
+PACK_BITS = 64
+
+#: Cells per block when the sort keys are written, entries per block after the sort.
+_KEY_BLOCK = 2048
+_SORT_BLOCK = 1 << 18
+
+
+def _pair_keys(
+    groups: list[tuple[NDArray[np.int64], NDArray[np.int64]]], mult: int, shift: int, packed: bool
+) -> NDArray[np.uint64]:
+    """``(I N + J) << shift | entry`` (``packed``) or ``I N + J`` of every local node pair
+    ``(I, J)`` of every cell, cell by cell (``mult = N << shift``)."""
+    nraw = sum(nodes.shape[0] * nodes.shape[1] ** 2 for _v, nodes in groups)
+    keys = np.empty(nraw, dtype=np.uint64)
+    at = 0
+    for _v, nodes in groups:
+        m, L = nodes.shape
+        u = nodes.astype(np.uint64)
+        for a in range(0, m, _KEY_BLOCK):
+            nb = u[a : a + _KEY_BLOCK]
+            mb = len(nb)
+            hi = nb * np.uint64(mult)
+            lo = nb << np.uint64(shift)
+            if packed:  # the entry index, split between the two broadcast operands
+                cell = np.arange(mb, dtype=np.uint64)[:, None] * np.uint64(L * L)
+                hi += cell + np.uint64(at + a * L * L)
+                hi += np.arange(L, dtype=np.uint64) * np.uint64(L)
+                lo += np.arange(L, dtype=np.uint64)
+            out = keys[at + a * L * L : at + (a + mb) * L * L].reshape(mb, L, L)
+            np.add(hi[:, :, None], lo[:, None, :], out=out)
+        at += m * L * L
+    return keys
+
+
+def _row_steps(
+    out: NDArray[np.int64], bptr: NDArray[np.int64], step: NDArray[np.int64], inc: int = 0
+) -> NDArray[np.int64]:
+    """``out[p] = inc p + sum_(I' <= I) step_I'`` for the entries ``p`` of row ``I`` (rows
+    from ``bptr``, none empty), in place: a running sum, no array repeated row by row."""
+    out.fill(inc)
+    out[0] = 0
+    out[bptr[:-1]] += step
+    return np.cumsum(out, out=out)
+
+
 def _pattern(n_nodes: int, groups: list[tuple[NDArray[np.int64], NDArray[np.int64]]]) -> _Pattern:
     """The sorted CSR pattern from the node pairs of every cell, by one sort.
 
     The dofs come in 2 x 2 blocks (two components per node), so the pairs of nodes are
     sorted (``n_nodes^2`` keys, with the entry index packed in the low bits when it fits
-    in 64 bits: a plain sort, no argsort), and row ``2 I + c`` of the scalar matrix lists
-    the columns ``2 J, 2 J + 1`` of the block row ``I``: the entry ``(2 I + c, 2 J + c')``
-    of block ``p`` (of row ``I``, length ``len_I``, start ``bptr_I``) is at
-    ``2 p + 2 bptr_I + 2 c len_I + c'``.
+    in :data:`PACK_BITS` bits: a plain sort, no argsort), and row ``2 I + c`` of the scalar
+    matrix lists the columns ``2 J, 2 J + 1`` of the block row ``I``: the entry
+    ``(2 I + c, 2 J + c')`` of block ``p`` (of row ``I``, length ``len_I``, start
+    ``bptr_I``) is at ``2 p + 2 bptr_I + 2 c len_I + c'``.
     """
     N = n_nodes
-    sizes = [nodes.shape[0] * nodes.shape[1] ** 2 for _v, nodes in groups]
-    nraw = sum(sizes)
+    nraw = sum(nodes.shape[0] * nodes.shape[1] ** 2 for _v, nodes in groups)
     ibits = max(nraw - 1, 1).bit_length()
-    packed = (N * N - 1).bit_length() + ibits <= 64
-    keys = np.empty(nraw, dtype=np.uint64 if packed else np.int64)
-    at = 0
-    for (_v, nodes), size in zip(groups, sizes, strict=True):
-        k = (nodes[:, :, None] * N + nodes[:, None, :]).reshape(-1)
-        if packed:
-            seg = keys[at : at + size]
-            np.left_shift(k.view(np.uint64), np.uint64(ibits), out=seg)
-            seg |= np.arange(at, at + size, dtype=np.uint64)
-        else:
-            keys[at : at + size] = k
-        at += size
+    packed = (N * N - 1).bit_length() + ibits <= PACK_BITS
+    index = np.int32 if nraw < 2**31 else np.int64
+    bpos = np.empty(nraw, dtype=index)
     if packed:
+        keys = _pair_keys(groups, N << ibits, ibits, True)
         keys.sort()
-        order = np.bitwise_and(keys, np.uint64((1 << ibits) - 1)).view(np.int64)
-        skey = np.right_shift(keys, np.uint64(ibits), out=keys).view(np.int64)
+        skey, order = keys, None
     else:
+        keys = _pair_keys(groups, N, 0, False)
         order = np.argsort(keys)
         skey = keys[order]
-    new = np.empty(nraw, dtype=bool)
-    new[0] = True
-    np.not_equal(skey[1:], skey[:-1], out=new[1:])
-    uid = np.cumsum(new)
-    uid -= 1
-    bpos = np.empty(nraw, dtype=np.int64)
-    bpos[order] = uid
-    del order, uid
-    ukey = skey[new]
-    del skey, new
-    nnzb = len(ukey)
-    bptr = np.searchsorted(ukey, np.arange(N + 1, dtype=np.int64) * N)
+    del keys
+    # block by block (cache-sized temporaries): the entry indices, the distinct keys, their
+    # ids at the entries, and the distinct keys moved to the front of the sorted array
+    nnzb, last = 0, None
+    mask = np.uint64((1 << ibits) - 1)
+    for a in range(0, nraw, _SORT_BLOCK):
+        blk = skey[a : a + _SORT_BLOCK]
+        if order is None:
+            entry = np.bitwise_and(blk, mask).view(np.int64)
+            np.right_shift(blk, np.uint64(ibits), out=blk)
+        else:
+            entry = order[a : a + _SORT_BLOCK]
+        new = np.empty(len(blk), dtype=bool)
+        new[0] = last is None or blk[0] != last
+        np.not_equal(blk[1:], blk[:-1], out=new[1:])
+        uid = np.cumsum(new, dtype=index)
+        np.add(uid, nnzb - 1, out=uid)
+        bpos[entry] = uid
+        last = blk[-1]
+        distinct = blk[new]
+        skey[nnzb : nnzb + len(distinct)] = distinct
+        nnzb += len(distinct)
+    del order
+    ukey = skey[:nnzb]
+    work = np.empty(nnzb, dtype=np.int64)
+    bptr = np.searchsorted(ukey, np.arange(N + 1, dtype=np.uint64) * np.uint64(N))
     blen = np.diff(bptr)
-    rows = np.repeat(np.arange(N, dtype=np.int64), blen)
-    cols = ukey - rows * N
     indptr = np.empty(2 * N + 1, dtype=np.int64)
     indptr[0] = 0
     indptr[1::2] = 4 * bptr[:-1] + 2 * blen
     indptr[2::2] = 4 * bptr[1:]
-    # both scalar rows of block row I list (2 J, 2 J + 1): one int64 holds the int32 pair
-    pair = np.empty((nnzb, 2), dtype=np.int32)
-    pair[:, 0] = 2 * cols
-    pair[:, 1] = pair[:, 0] + 1
+    # both scalar rows of block row I list (2 J, 2 J + 1): one 64-bit word holds the int32
+    # pair, 2 J + (2 J + 1) 2^32 = (I N + J) c + 2^32 - I N c mod 2^64, c = 2 + 2^33 (2 J 2^32
+    # + 2 J + 1 = ... + 1 - I N c if the high half comes first)
+    c = np.uint64(2 + 2**33)
+    pair = np.multiply(ukey, c, out=ukey)
+    rows = np.arange(N, dtype=np.uint64)
+    rows *= np.uint64(N) * c
+    _row_steps(work, bptr, -np.diff(rows, prepend=np.uint64(0)).view(np.int64))
+    work += 1 if sys.byteorder == "big" else 2**32
+    pair += work.view(np.uint64)
+    # the first copy of entry p of row I at p + bptr_I, the second at p + bptr_(I+1)
     indices = np.empty(4 * nnzb, dtype=np.int32)
-    slot = np.arange(nnzb, dtype=np.int64) + bptr[rows]  # p + bptr_I, in int64 units
-    pairs64, ind64 = pair.view(np.int64).reshape(-1), indices.view(np.int64)
-    ind64[slot] = pairs64
-    ind64[slot + blen[rows]] = pairs64
+    ind64 = indices.view(np.uint64)
+    slot = _row_steps(work, bptr, np.concatenate([[0], blen[:-1]]), 1)
+    ind64[slot] = pair
+    ind64[_row_steps(work, bptr, blen, 1)] = pair
     return _Pattern(indptr, indices, bpos, bptr)
 
 
@@ -218,7 +277,8 @@ def stiffness2(mesh: Mesh, material: Material, stabilization: str = "paper") -> 
     (:func:`_pattern`, one sort of the node pairs); the local matrices are then built by
     vertex count in batches of :data:`CHUNK` cells (:func:`element_stiffness_into`, with
     reused buffers) and added into the CSR data batch by batch (``np.add.at`` on the
-    precomputed places: cache-resident batches, no array of all entries). The result is
+    precomputed places, the two columns of a node as one complex number: cache-resident
+    batches, no array of all entries). The result is
     the canonical CSR matrix (sorted indices, no duplicates) of the sum of the local
     matrices.
     """
@@ -227,30 +287,30 @@ def stiffness2(mesh: Mesh, material: Material, stabilization: str = "paper") -> 
     ndof = num.n_dofs
     groups = _cell_nodes(mesh)
     pat = _pattern(ndof // 2, groups)
-    bstart2 = 2 * pat.bptr[:-1]
-    blen2 = 2 * np.diff(pat.bptr)
+    bstart, blen = pat.bptr[:-1], np.diff(pat.bptr)
     data = np.zeros(len(pat.indices))
+    # the two columns (2 J, 2 J + 1) of a scalar row are adjacent in the data and in the
+    # local matrices: summed as one complex number, half the places
+    pairs = data.view(np.complex128)
     at = 0  # in node pairs
     for verts, nodes in groups:
         m_all, L = nodes.shape
         nd = 2 * L
         mc = min(CHUNK, m_all)
         work = ElementWork(mc, (L - 1) // 2)
-        K_buf, pos_buf = np.empty((mc, nd, nd)), np.empty((mc, L, 2, L, 2), dtype=np.int64)
+        K_buf, pos_buf = np.empty((mc, nd, nd)), np.empty((mc, L, 2, L), dtype=np.intp)
+        row_buf = np.empty((mc, L, 2), dtype=np.intp)
         for a in range(0, m_all, CHUNK):
             v, nod = verts[a : a + CHUNK], nodes[a : a + CHUNK]
             m = len(v)
-            K, P = K_buf[:m], pos_buf[:m]
+            K, P, row = K_buf[:m], pos_buf[:m], row_buf[:m]
             element_stiffness_into(mesh.points[v], material, stabilization, K, work)
-            # local dof 2 l + c: (m, l, c, l', c') -> 2 bpos + 2 bptr_I + 2 c len_I + c'
-            bp = pat.bpos[at : at + m * L * L].reshape(m, L, 1, L, 1)
-            row = (
-                bstart2[nod][:, :, None, None, None]
-                + blen2[nod][:, :, None, None, None] * np.arange(2)[:, None, None]
-            )
-            np.add(2 * bp, row, out=P[..., :1])
-            np.add(P[..., :1], 1, out=P[..., 1:])
-            np.add.at(data, P.reshape(-1), K.reshape(-1))  # in order: as one bincount
+            # local dofs (2 l + c, 2 l' + c'), c' = 0, 1 -> pair bpos + bptr_I + c len_I
+            np.take(bstart, nod, out=row[:, :, 0])
+            np.add(row[:, :, 0], blen[nod], out=row[:, :, 1])
+            bp = pat.bpos[at : at + m * L * L].reshape(m, L, 1, L)
+            np.add(bp, row[:, :, :, None], out=P)
+            np.add.at(pairs, P.reshape(-1), K.view(np.complex128).reshape(-1))  # in order
             at += m * L * L
     A = sp.csr_matrix((data, pat.indices, pat.indptr), shape=(ndof, ndof))
     A.has_sorted_indices = True

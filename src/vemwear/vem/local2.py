@@ -12,7 +12,7 @@ local order used everywhere below (``N = 4 n + 2`` of them):
 All of them are displacements (the moments are means), so the dofi-dofi stabilization
 weighs them alike. Polynomials are written in the scaled monomials
 ``m_j = 1, xi, eta, xi^2, xi eta, eta^2`` with ``(xi, eta) = (x - x_K) / h_K`` (``x_K`` the
-vertex average, ``h_K`` the diameter), and ``[P2(K)]^2`` in the basis ``q_0..q_11`` of
+centroid, ``h_K`` the diameter), and ``[P2(K)]^2`` in the basis ``q_0..q_11`` of
 :data:`BASIS`: the three rigid motions first (``e_x``, ``e_y``, the rotation
 ``(-eta, xi)``), then the three linear strains ``(xi, 0)``, ``(0, eta)``, ``(eta, xi)``, then
 ``m_j e_c`` for the quadratic ``m_j``.
@@ -33,6 +33,11 @@ quadratic (vertex values and the edge mean fix it: the midpoint value is
 Both right-hand sides are exact functionals of ``v`` and exact for ``v`` in ``[P2]^2``, so
 ``Pi q = q`` on ``[P2]^2``; the vertex averages (3.9)-(3.10) of the paper are a k = 1 device
 (for k = 1 there is no cell moment), see docs/method.md, "Second order (k = 2)".
+
+**Solving (3.8).** About the centroid ``int_K xi = int_K eta = 0``, so the energy does not
+couple the linear strains to the quadratics: in the working basis of :func:`_constants` it is
+diagonal but for the 2 x 2 matrix of second moments, and ``Pi`` has a closed form (no
+inverse per cell, :func:`_project`).
 
 **Bilinear form (3.11).** ``a_h^K = a^K(Pi u, Pi v) + s_K sum_i chi_i((I - Pi) u) chi_i((I -
 Pi) v)``, the dofi-dofi stabilization with the k = 1 weights (:mod:`vemwear.vem.local`).
@@ -129,8 +134,8 @@ def basis_gradients(xi: Array, h: Array) -> Array:
 
 
 def cell_geometry(X: Array) -> tuple[Array, Array, Array]:
-    """Vertex averages ``x_K``, diameters ``h_K`` and the integrals of the six scaled
-    monomials over every cell (the degree-2 rule on the fan: exact on any simple cell).
+    """Vertex averages ``xbar``, diameters ``h_K`` and the integrals of the six monomials
+    scaled about ``xbar`` over every cell (the degree-2 rule on the fan: exact on any simple cell).
 
     Returns
     -------
@@ -159,7 +164,7 @@ class LocalProjection2(NamedTuple):
     dofs: Array  # (m, N, 12) the local dofs of the basis functions, chi_i(q_a)
     energy: Array  # (m, 12, 12) a^K(q_a, q_b)
     area: Array  # (m,)
-    center: Array  # (m, 2) the vertex averages x_K
+    center: Array  # (m, 2) the centroids x_K
     h: Array  # (m,) the diameters h_K
 
 
@@ -170,39 +175,53 @@ class Local2(NamedTuple):
     projection: LocalProjection2
 
 
-def _pairs(n: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
-    """The vertex pairs ``i < j`` of an n-gon (for the diameters)."""
-    if n not in _PAIRS:
-        _PAIRS[n] = np.triu_indices(n, 1)
-    return _PAIRS[n]
-
-
-_PAIRS: dict[int, tuple[NDArray[np.intp], NDArray[np.intp]]] = {}
-
 #: ``D = rows @ _BT``: the dofs ``chi(q_a)`` from the monomials (or their means) at the
 #: local nodes; ``_BT[j, 12 c + a] = BASIS[a, j, c]``.
 _BT = np.ascontiguousarray(BASIS.transpose(1, 2, 0).reshape(6, 2 * N_BASIS))
 _BT.setflags(write=False)
 
 
+class _Tables(NamedTuple):
+    """Constant tables of a material (:func:`_constants`)."""
+
+    WJ: Array  # (6, 144): G = sum_j (h^-2 int_K m_j) WJ[j] in BASIS
+    W: Array  # (12, 12): the working basis p_a = sum_b W[b, a] q_b
+    SHT: Array  # (12, 12): B'/2 = SHT @ U, rows a, columns 6 c + (p, t)
+    BTT: Array  # (12, 12): D' = BTT @ Dm, rows a, columns 6 c + j
+
+
 @functools.lru_cache(maxsize=32)
-def _constants(material: Material) -> tuple[Array, Array, Array]:
-    """Tables of a material: ``WJ`` (6, 144) with ``G = h^-2 sum_j (int_K m_j) WJ[j]``;
+def _constants(material: Material) -> _Tables:
+    """The tables of a material.
+
     ``S`` (6, 24) with ``h sigma(q_a) N . e_c = sum_(p, t) m_p N_t S[(p, t), 12 c + a]``
-    (``p`` over 1, xi, eta and ``t`` over the components of N); ``DIV`` (2, 12) with
-    ``h^2 div sigma(q_a) . e_c = DIV[c, a]``."""
+    (``p`` over 1, xi, eta and ``t`` over the components of N; ``h^2 div sigma(q_a) . e_c
+    = S[(1, 0), 12 c + a] + S[(2, 1), 12 c + a]``). The working basis ``W`` keeps the rigid
+    motions and makes the energy diagonal about the centroid (:func:`_project`): the
+    linear strains by ``L^-T`` with ``L L^T`` their energy per unit scaled area, the
+    quadratics by ``T^-1 (I_2 (x) L_D^-T)`` with ``T`` the map from their coefficients to
+    the strain gradient ``h^2 (d_x eps, d_y eps)`` (Voigt) and ``L_D L_D^T = D``.
+    """
     Dm = material.D
-    W = np.einsum("apk,kl,brl->prab", STRAIN, Dm, STRAIN)  # (3, 3, 12, 12)
+    W4 = np.einsum("apk,kl,brl->prab", STRAIN, Dm, STRAIN)  # (3, 3, 12, 12)
     WJ = np.zeros((6, N_BASIS, N_BASIS))
     for p in range(3):
         for r in range(3):
-            WJ[_PAIR[p, r]] += W[p, r]
+            WJ[_PAIR[p, r]] += W4[p, r]
     SIG = np.einsum("kl,apl->apk", Dm, STRAIN)  # h sigma(q_a) = sum_p SIG[a, p] m_p (Voigt)
     S = np.zeros((3, 2, 2, N_BASIS))  # [p, t, c, a]: (sxx nx + sxy ny, sxy nx + syy ny)
     S[:, 0, 0], S[:, 1, 0] = SIG[:, :, 0].T, SIG[:, :, 2].T
     S[:, 0, 1], S[:, 1, 1] = SIG[:, :, 2].T, SIG[:, :, 1].T
-    DIV = np.stack([SIG[:, 1, 0] + SIG[:, 2, 2], SIG[:, 1, 2] + SIG[:, 2, 1]])
-    out = (WJ.reshape(6, -1), S.reshape(6, 2 * N_BASIS), DIV)
+    W = np.eye(N_BASIS)
+    W[3:6, 3:6] = np.linalg.inv(np.linalg.cholesky(WJ[0, 3:6, 3:6])).T
+    T = STRAIN[6:, 1:, :].reshape(6, 6).T  # [(p, k), a]
+    LD = np.linalg.inv(np.linalg.cholesky(Dm)).T
+    W[6:, 6:] = np.linalg.solve(T, np.kron(np.eye(2), LD))
+    S2 = np.einsum("ptca,ab->ptcb", S, W).reshape(6, 2, N_BASIS)  # [(p, t), c, a]
+    SHT = 0.5 * S2.transpose(2, 1, 0).reshape(N_BASIS, N_BASIS)
+    BT = np.einsum("ajc,ab->jcb", BASIS, W)  # [j, c, a]
+    BTT = BT.transpose(2, 1, 0).reshape(N_BASIS, N_BASIS)
+    out = _Tables(WJ.reshape(6, -1), W, SHT, BTT)
     for a in out:
         a.setflags(write=False)
     return out
@@ -213,106 +232,134 @@ class ElementWork:
     batch to batch by :func:`element_stiffness_into` (fresh arrays of a few MB per batch
     cost more in page faults than the arithmetic).
 
-    ``L[:, :, :12]`` holds ``Pi^T`` (N, 12) and ``L[:, :, 12:]`` the dofs of the basis ``D``
-    (N, 12) after :func:`_project`.
+    Component-major: ``X[a, k, l]`` is row ``a`` (of the working basis, or of the inputs
+    ``6 c + j``) of cell ``k`` at local dof ``l``, so that the constant maps are single
+    matrix products and every update is a contiguous block. The entries that do not depend
+    on the cell (the translations' rows, the cell node of ``Dm``, the zero component
+    halves) are written once here.
     """
 
     def __init__(self, m: int, n: int) -> None:
         nd = local_dof_count(n)
         self.m, self.n = m, n
-        self.L = np.empty((m, nd, 2 * N_BASIS))
-        self.R = np.empty((m, nd, 2 * N_BASIS))
+        # monomial dofs and by-parts data, rows 6 c + j, at local dof 2 node + c only
+        self.Dm = np.zeros((N_BASIS, m, 2 * n + 1, 2))
+        self.Dm[0, :, :, 0] = self.Dm[6, :, :, 1] = 1.0
+        self.U = np.zeros((N_BASIS, m, 2 * n + 1, 2))
+        self.B = np.empty((N_BASIS, m, nd))  # B'/2: a^K(v, p_a) / 2 of the local dofs
+        self.D = np.empty((N_BASIS, m, nd))  # the local dofs of p_a
+        self.Pi = np.zeros((N_BASIS, m, nd))  # Pi in the working basis
+        self.Pi[0, :, 4 * n] = self.Pi[1, :, 4 * n + 1] = 1.0
+        self.Y = np.empty((N_BASIS, m, nd))
+        self.M = np.empty((m, N_BASIS, N_BASIS))
         self.Z = np.empty((m, nd, nd))
-        self.B = np.empty((m, nd, N_BASIS))  # a^K(v, q_a) of the dofs, transposed
-        self.D = np.empty((m, nd, N_BASIS))
-        self.U = np.empty((m, 2, n, 3, 2))
-        self.mono = np.empty((m, 2 * n, 6))
-        self.rows = np.empty((m, 2 * n + 1, 6))
 
 
-def _project(X: Array, material: Material, w: ElementWork) -> tuple[Array, ...]:
-    """``Pi`` (3.8) of a batch into ``w`` (module docstring); returns the matrices G, the
-    scaled moments ``h^-2 int_K m_j`` (m, 6), the vertex averages and the diameters.
+#: Columns per call in :func:`_constant_product`.
+_COLUMNS = 1024
 
-    With ``G[3:, 3:] pi_2 = B[3:]`` for the nine non-rigid ``q_a`` (``G`` vanishes on the
-    rigid motions) and the three rigid-motion rows upper triangular in ``pi_1`` (the
-    cell means of e_x, e_y are exact unit vectors, the rotation of the translations is
-    zero), ``Pi`` costs one 9 x 9 inverse and a back substitution.
+
+def _constant_product(C: Array, X: Array, out: Array) -> None:
+    """``out = C @ X`` for a small constant ``C`` (12, 12), in blocks of :data:`_COLUMNS`
+    columns: a larger product would be threaded by OpenBLAS (above about 2.6e5
+    multiply-adds), and waking its threads between the small products of a batch costs
+    far more than the product on a busy machine."""
+    for a in range(0, X.shape[1], _COLUMNS):
+        np.matmul(C, X[:, a : a + _COLUMNS], out=out[:, a : a + _COLUMNS])
+
+
+def _project(X: Array, material: Material, w: ElementWork) -> tuple[Array, Array, Array]:
+    """``Pi`` (3.8) of a batch into ``w`` (``w.Pi`` in the working basis, ``w.B`` = B'/2,
+    ``w.D`` the dofs of the working basis); returns the scaled moments about the centroid
+    ``h^-2 int_K m_j`` (m, 6) (``[:, 1:3]`` zero), the centroids and the diameters.
+
+    About the centroid the energy of the working basis ``p_a`` (:func:`_constants`) is
+    ``G' = diag(0_3, |K|_h I_3, M_2 (x) I_3)`` (``|K|_h = h^-2 |K|``, ``M_2`` the scaled
+    second moments): no linear-quadratic coupling, as ``int_K xi = int_K eta = 0``. So the
+    non-rigid part is ``B'_lin / |K|_h`` and ``(M_2^-1 (x) I_3) B'_quad`` in closed form.
+    The quadratics are taken with their cell mean removed (``m_j - mean_K m_j``, which
+    does not change their strains), so every non-translation ``p_a`` has cell mean zero and
+    rotation zero (the rotation of a quadratic is linear with mean zero): the cell-mean
+    conditions give the translations as the cell moments, the rotation condition the
+    rotation from the edge moments alone.
     """
     m, n, _ = X.shape
-    WJ, S, DIV = _constants(material)
-    L, B, D, U = w.L[:m], w.B[:m], w.D[:m], w.U[:m]
-    center = X.mean(axis=1)
-    i, j = _pairs(n)
-    d = X[:, i] - X[:, j]
-    h = np.sqrt((d[..., 0] ** 2 + d[..., 1] ** 2).max(axis=1))
-    a = (X - center[:, None, :]) / h[:, None, None]  # scaled vertices
-    b = np.roll(a, -1, axis=1)
-    ax, ay, bx, by = a[..., 0], a[..., 1], b[..., 0], b[..., 1]
+    tab = _constants(material)
+    xy = X.transpose(2, 0, 1)  # (2, m, n)
+    c0 = X.mean(axis=1).T
+    P = np.empty((2, m, 2 * n))  # vertices about the vertex average, twice over
+    np.subtract(xy, c0[:, :, None], out=P[:, :, :n])
+    P[:, :, n:] = P[:, :, :n]
+    d = P[:, :, :n, None] - P[:, :, None, :n]
+    d *= d
+    h = np.sqrt((d[0] + d[1]).reshape(m, n * n).max(axis=1))
+    P /= h[:, None]
+    ax, ay, bx, by = P[0, :, :n], P[1, :, :n], P[0, :, 1 : n + 1], P[1, :, 1 : n + 1]
     A = 0.5 * (ax * by - bx * ay)  # the fan from the vertex average, signed
-    mom = np.empty((m, 6))  # h^-2 int_K m_j, exact on the fan
-    mom[:, 0] = A.sum(axis=1)
-    mom[:, 1] = (A * (ax + bx)).sum(axis=1) / 3.0
-    mom[:, 2] = (A * (ay + by)).sum(axis=1) / 3.0
-    mom[:, 3] = (A * (ax * ax + ax * bx + bx * bx)).sum(axis=1) / 6.0
-    mom[:, 4] = (A * (2.0 * (ax * ay + bx * by) + ax * by + bx * ay)).sum(axis=1) / 12.0
-    mom[:, 5] = (A * (ay * ay + ay * by + by * by)).sum(axis=1) / 6.0
-    area = mom[:, 0]
+    area = A.sum(axis=1)  # |K|_h
+    gx = (A * (ax + bx)).sum(axis=1) / (3.0 * area)
+    gy = (A * (ay + by)).sum(axis=1) / (3.0 * area)
+    mom = np.zeros((m, 6))  # h^-2 int_K m_j about the centroid (parallel axes)
+    mom[:, 0] = area
+    sxy = (A * (2.0 * (ax * ay + bx * by) + ax * by + bx * ay)).sum(axis=1)
+    mom[:, 3] = (A * (ax * ax + ax * bx + bx * bx)).sum(axis=1) / 6.0 - area * gx * gx
+    mom[:, 4] = sxy / 12.0 - area * gx * gy
+    mom[:, 5] = (A * (ay * ay + ay * by + by * by)).sum(axis=1) / 6.0 - area * gy * gy
+    P[0] -= gx[:, None]
+    P[1] -= gy[:, None]
+    center = (c0 + h * np.stack([gx, gy])).T
+    mx, my = 0.5 * (ax + bx), 0.5 * (ay + by)  # edge midpoints
 
-    # monomials at the vertices and the edge midpoints; D from them
-    mono = w.mono[:m]
-    x = mono[:, :, 1].reshape(m, 2, n)
-    y = mono[:, :, 2].reshape(m, 2, n)
-    x[:, 0], y[:, 0] = ax, ay
-    np.multiply(ax + bx, 0.5, out=x[:, 1])
-    np.multiply(ay + by, 0.5, out=y[:, 1])
-    mono[:, :, 0] = 1.0
-    mono[:, :, 3] = mono[:, :, 1] ** 2
-    np.multiply(mono[:, :, 1], mono[:, :, 2], out=mono[:, :, 4])
-    mono[:, :, 5] = mono[:, :, 2] ** 2
-    mv, mm = mono[:, :n], mono[:, n:]
-    rows = w.rows[:m]
-    rows[:, :n] = mv
-    rows[:, n : 2 * n] = (mv + 4.0 * mm + np.roll(mv, -1, axis=1)) / 6.0  # Simpson
-    rows[:, 2 * n] = mom / area[:, None]
-    np.matmul(rows, _BT, out=D.reshape(m, 2 * n + 1, 2 * N_BASIS))
-    L[:, :, N_BASIS:] = D
-    G = np.matmul(mom, WJ).reshape(m, N_BASIS, N_BASIS)
+    # the scalar monomial dofs j = 1..5 (vertex values, then edge means; cell means zero),
+    # the quadratics mean-free
+    V = np.empty((5, m, 2, n))
+    V[0, :, 0], V[0, :, 1], V[1, :, 0], V[1, :, 1] = ax, mx, ay, my
+    np.multiply(ax, ax, out=V[2, :, 0])
+    V[2, :, 1] = (ax * ax + ax * bx + bx * bx) / 3.0
+    np.multiply(ax, ay, out=V[3, :, 0])
+    V[3, :, 1] = (2.0 * (ax * ay + bx * by) + ax * by + bx * ay) / 6.0
+    np.multiply(ay, ay, out=V[4, :, 0])
+    V[4, :, 1] = (ay * ay + ay * by + by * by) / 3.0
+    V[2:] -= (mom[:, 3:] / area[:, None]).T[:, :, None, None]
+    Dm = w.Dm[:, :m]
+    Dm[1:6, :, : 2 * n, 0] = Dm[7:, :, : 2 * n, 1] = V.reshape(5, m, 2 * n)
 
-    # a^K(v, q_a) by parts (3.8): B[:, i, a] for the local dof i
+    # a^K(v, q) by parts (3.8), U[(p, t)]: Simpson on edge i with v(mid) = (6 mean_i - v_i -
+    # v_(i+1)) / 4: vertex i gets (t_i(x_i) + t_(i-1)(x_i) - t_i(mid_i) - t_(i-1)(mid_(i-1)))
+    # / 6 (zero for p = 0), mean_i gets t_i(mid_i); the cell mean gets -|K| div sigma
     Nx, Ny = by - ay, ax - bx  # |e_i| n_i / h
-    um, uv = U[:, 1], U[:, 0]
-    np.multiply(mm[..., :3], Nx[..., None], out=um[..., 0])
-    np.multiply(mm[..., :3], Ny[..., None], out=um[..., 1])
-    np.multiply(mv[..., :3], (Nx + np.roll(Nx, 1, axis=1))[..., None], out=uv[..., 0])
-    np.multiply(mv[..., :3], (Ny + np.roll(Ny, 1, axis=1))[..., None], out=uv[..., 1])
-    uv -= um
-    uv -= np.roll(um, 1, axis=1)
-    uv /= 6.0
-    # Simpson on edge i with v(mid) = (6 mean_i - v_i - v_(i+1)) / 4: vertex i gets
-    # (t_i(x_i) + t_(i-1)(x_i) - t_i(mid_i) - t_(i-1)(mid_(i-1))) / 6, mean_i gets t_i(mid_i)
-    Bv = B.reshape(m, 2 * n + 1, 2 * N_BASIS)
-    np.matmul(U.reshape(m, 2 * n, 6), S, out=Bv[:, : 2 * n])
-    np.multiply(-area[:, None, None], DIV, out=B[:, 4 * n :])
+    Nxs, Nys = Nx + np.roll(Nx, 1, axis=1), Ny + np.roll(Ny, 1, axis=1)
+    Q = np.empty((6, m, 2, n))
+    Uv, Ue = Q[:, :, 0], Q[:, :, 1]
+    Ue[0], Ue[1], Uv[0], Uv[1] = Nx, Ny, 0.0, 0.0
+    for p, vp, mp in ((1, ax, mx), (2, ay, my)):
+        np.multiply(mp, Nx, out=Ue[2 * p])
+        np.multiply(mp, Ny, out=Ue[2 * p + 1])
+        np.multiply(vp, Nxs, out=Uv[2 * p])
+        np.multiply(vp, Nys, out=Uv[2 * p + 1])
+    Uv[2:] -= Ue[2:]
+    Uv[2:] -= np.roll(Ue[2:], 1, axis=2)
+    Uv[2:] /= 6.0
+    U = w.U[:, :m]
+    U[:6, :, : 2 * n, 0] = U[6:, :, : 2 * n, 1] = Q.reshape(6, m, 2 * n)
+    U[2, :, 2 * n, 0] = U[5, :, 2 * n, 0] = U[8, :, 2 * n, 1] = U[11, :, 2 * n, 1] = -area
 
-    # pi_2 = G22^-1 B[3:], then the rigid rows (cell mean; h / |K| int_K rot)
-    Gi = np.linalg.inv(G[:, 3:, 3:])
-    pi = L[:, :, :N_BASIS]  # Pi^T
-    np.matmul(B[:, :, 3:], Gi.transpose(0, 2, 1), out=pi[:, :, 3:])
-    R = np.empty((m, 3, N_BASIS))
-    R[:, :2] = D[:, 4 * n :]
-    np.divide(np.matmul(mom[:, :3], ROT[:, :3].T), area[:, None], out=R[:, 2])
-    W1 = -np.matmul(pi[:, :, 3:], R[:, :, 3:].transpose(0, 2, 1))  # (m, N, 3)
-    W1[:, 4 * n, 0] += 1.0
-    W1[:, 4 * n + 1, 1] += 1.0
-    W1[:, 2 * n : 4 * n, 2] += ((b - a) / area[:, None, None]).reshape(m, 2 * n)  # |e| t
-    # R[:, :, :3] is upper triangular (the rest vanishes identically)
-    pi[:, :, 2] = W1[:, :, 2] / R[:, 2, 2, None]
-    pi[:, :, 1] = (W1[:, :, 1] - R[:, 1, 2, None] * pi[:, :, 2]) / R[:, 1, 1, None]
-    pi[:, :, 0] = (
-        W1[:, :, 0] - R[:, 0, 1, None] * pi[:, :, 1] - R[:, 0, 2, None] * pi[:, :, 2]
-    ) / R[:, 0, 0, None]
-    return G, mom, center, h
+    B, D, Pi = w.B[:, :m], w.D[:, :m], w.Pi[:, :m]
+    _constant_product(tab.SHT, U.reshape(N_BASIS, -1), B.reshape(N_BASIS, -1))
+    _constant_product(tab.BTT, Dm.reshape(N_BASIS, -1), D.reshape(N_BASIS, -1))
+    # rotation: h / |K| int_K rot Pi v = 2 pi_2 = sum_i |e_i| mean_i . t_i h / |K|
+    r = 0.5 / area[:, None]
+    np.multiply(bx - ax, r, out=Pi[2, :, 2 * n : 4 * n : 2])
+    np.multiply(by - ay, r, out=Pi[2, :, 2 * n + 1 : 4 * n : 2])
+    np.multiply(B[3:6], 2.0 / area[:, None], out=Pi[3:6])
+    det = 2.0 / (mom[:, 3] * mom[:, 5] - mom[:, 4] ** 2)  # 2 M_2^-1 = [i11 i12; i12 i22]
+    i11, i12, i22 = (mom[:, 5] * det)[:, None], (-mom[:, 4] * det)[:, None], (mom[:, 3] * det)
+    B1, B2 = B[6:9], B[9:]
+    np.multiply(B1, i11, out=Pi[6:9])
+    Pi[6:9] += B2 * i12
+    np.multiply(B2, i22[:, None], out=Pi[9:])
+    Pi[9:] += B1 * i12
+    return mom, center, h
 
 
 def local_projection2(X: Array, material: Material) -> LocalProjection2:
@@ -326,11 +373,25 @@ def local_projection2(X: Array, material: Material) -> LocalProjection2:
     material : Material
         (3.8) is the energy projection: for k = 2 it depends on the Lamé coefficients.
     """
+    X = np.asarray(X, dtype=float)
     m, n, _ = X.shape
+    nd = local_dof_count(n)
     w = ElementWork(m, n)
-    G, mom, center, h = _project(np.asarray(X, dtype=float), material, w)
-    pi = np.ascontiguousarray(w.L[:, :, :N_BASIS].transpose(0, 2, 1))
-    return LocalProjection2(pi, w.D, G, mom[:, 0] * h * h, center, h)
+    mom, center, h = _project(X, material, w)
+    tab = _constants(material)
+    pi = np.matmul(tab.W, w.Pi.reshape(N_BASIS, -1)).reshape(N_BASIS, m, nd)
+    # the quadratics of the working basis are mean-free: q_(6 + 2 k + c) = m_(3 + k) e_c
+    # minus its mean (mom[3 + k] / |K|_h) e_c
+    mu = mom[:, 3:] / mom[:, :1]
+    for c in range(2):
+        pi[c] -= np.einsum("kml,mk->ml", pi[6 + c :: 2], mu)
+    Dm = np.ascontiguousarray(w.Dm[:6, :, :, 0].transpose(1, 2, 0))  # (m, 2 n + 1, 6)
+    Dm[:, :, 3:] += mu[:, None, :]  # the quadratics with their means (cell rows: the means)
+    dofs = np.matmul(Dm, _BT).reshape(m, nd, N_BASIS)
+    G = np.matmul(mom, tab.WJ).reshape(m, N_BASIS, N_BASIS)
+    return LocalProjection2(
+        np.ascontiguousarray(pi.transpose(1, 0, 2)), dofs, G, mom[:, 0] * h * h, center, h
+    )
 
 
 def _check_stabilization(stabilization: str) -> None:
@@ -342,40 +403,39 @@ def _check_stabilization(stabilization: str) -> None:
 
 def element_stiffness_into(
     X: Array, material: Material, stabilization: str, out: Array, w: ElementWork
-) -> tuple[Array, ...]:
+) -> tuple[Array, Array, Array]:
     """Write ``a_h^K`` (3.11) of a batch of cells into ``out`` (m, N, N), using the buffers
     ``w`` (:class:`ElementWork` for at least ``m`` cells with ``n`` vertices).
 
-    With ``P = D Pi`` (the dofs of ``Pi v``), ``s`` the weight of the dofi-dofi term and
-    ``B`` the right-hand sides of (3.8): ``a_h^K = Pi^T G Pi + s (I - P)^T (I - P)
-    = Z + Z^T + s I`` with ``Z = Pi^T (s/2 D^T D Pi + B/2) - s D Pi``, one product
-    ``[Pi^T | D] [s/2 D^T D Pi + B/2 ; -s Pi]`` of inner size 24, symmetric by construction
-    (``Pi^T G Pi = Pi^T B`` as ``G Pi = B`` on the non-rigid rows and ``G`` vanishes on
-    the rigid motions).
+    With ``D`` the dofs of the working basis, ``Pi`` the projection in it, ``P = D Pi``
+    (the dofs of ``Pi v``), ``s`` the weight of the dofi-dofi term and ``B`` the
+    right-hand sides of (3.8): ``a_h^K = Pi^T G Pi + s (I - P)^T (I - P) = Z + Z^T + s I``
+    with ``Z = Pi^T Y``, ``Y = s/2 (D^T D) Pi + B/2 - s D^T``: three small products per
+    cell (inner sizes N, 12, 12), symmetric by construction (``Pi^T G Pi = Pi^T B`` as
+    ``G Pi = B`` on the non-rigid rows and ``G`` vanishes on the rigid motions).
 
     Returns
     -------
-    The matrices ``G``, the scaled moments, the vertex averages and the diameters.
+    The scaled moments about the centroids (m, 6), the centroids and the diameters.
     """
     m, n, _ = X.shape
     nd = local_dof_count(n)
     geometry = _project(X, material, w)
-    L, R, D, B, Z = w.L[:m], w.R[:m], w.D[:m], w.B[:m], w.Z[:m]
-    pi = L[:, :, :N_BASIS]
-    s = np.ones(m)  # the weight of the dofi-dofi term, per cell
+    B, D, Pi, Y, M, Z = w.B[:, :m], w.D[:, :m], w.Pi[:, :m], w.Y[:, :m], w.M[:m], w.Z[:m]
+    s = np.ones((m, 1))  # the weight of the dofi-dofi term, per cell
     if stabilization == "eta":
         s *= 2.0 * material.eta
-    elif stabilization == "trace":  # tr(Pi^T G Pi) / N
-        s = np.einsum("mia,mia->m", pi[:, :, 3:], B[:, :, 3:]) / nd
-    sc = s[:, None, None]
-    M = np.matmul(D.transpose(0, 2, 1), D)
-    M *= 0.5 * sc
-    np.matmul(pi, M, out=R[:, :, :N_BASIS])
-    R[:, :, 3:N_BASIS] += 0.5 * B[:, :, 3:]
-    np.multiply(pi, -sc, out=R[:, :, N_BASIS:])
-    np.matmul(L, R.transpose(0, 2, 1), out=Z)
+    elif stabilization == "trace":  # tr(Pi^T G Pi) / N, G Pi = B on the non-rigid rows
+        s[:, 0] = np.einsum("aml,aml->m", Pi[3:], B[3:]) * (2.0 / nd)
+    Dc, Pc, Yc = D.transpose(1, 0, 2), Pi.transpose(1, 0, 2), Y.transpose(1, 0, 2)
+    np.matmul(Dc, Dc.transpose(0, 2, 1), out=M)
+    M *= 0.5 * s[:, :, None]
+    np.matmul(M, Pc, out=Yc)
+    Y += B
+    Y -= D if stabilization == "paper" else D * s
+    np.matmul(Pc.transpose(0, 2, 1), Yc, out=Z)
     np.add(Z, Z.transpose(0, 2, 1), out=out)
-    out.reshape(m, nd * nd)[:, :: nd + 1] += s[:, None]
+    out.reshape(m, nd * nd)[:, :: nd + 1] += s
     return geometry
 
 
@@ -400,8 +460,6 @@ def element_matrices2(X: Array, material: Material, stabilization: str = "paper"
     X = np.asarray(X, dtype=float)
     m, n, _ = X.shape
     nd = local_dof_count(n)
-    w = ElementWork(m, n)
     K = np.empty((m, nd, nd))
-    G, mom, center, h = element_stiffness_into(X, material, stabilization, K, w)
-    pi = np.ascontiguousarray(w.L[:, :, :N_BASIS].transpose(0, 2, 1))
-    return Local2(K, LocalProjection2(pi, w.D, G, mom[:, 0] * h * h, center, h))
+    element_stiffness_into(X, material, stabilization, K, ElementWork(m, n))
+    return Local2(K, local_projection2(X, material))
