@@ -6,6 +6,9 @@ compliance laws, ``TimeGrid``, ``SolverOptions``, the mesh generators and reader
 its ``ValueError`` into a :class:`ConfigError` naming the key. What no library object
 checks is checked here: the boundary selectors (each selects an edge, no edge in two
 parts), loads given by expressions being finite, and ``[output] times`` on the grid.
+
+One job, the path from a file to the library objects, in 2D and 3D; its length is the
+one place each section becomes its object and each error gets its key path.
 """
 
 from __future__ import annotations
