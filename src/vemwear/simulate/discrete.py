@@ -11,6 +11,7 @@ problem's space (:mod:`vemwear.vem.space`), so nothing here depends on the order
 from __future__ import annotations
 
 import dataclasses
+import functools
 import warnings
 from typing import TYPE_CHECKING, Any
 
@@ -18,13 +19,18 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..contact import ContactBoundary, tangential_velocity
+from ..contact import ContactBoundary, tangential_velocity, velocity_levels
 from ..solvers.system import ContactSystem, StepData, StepSolution
 
 if TYPE_CHECKING:
     from .problem import Problem
 
 __all__ = ["DataError", "Discretization"]
+
+
+#: Tangential foundation velocities within this multiple of the largest ``|v*|`` of the
+#: time grid are zero (64 units in the last place: round-off of the data's expressions).
+VELOCITY_ROUNDOFF = 64 * float(np.finfo(np.float64).eps)
 
 
 class DataError(ValueError):
@@ -202,11 +208,32 @@ class Discretization:
 
     def tangential_velocity(self, t: float) -> NDArray[np.float64]:
         """``v*(t) . tau_a`` at every contact node (each part's own v*); the last time's
-        values are kept (step data and wear rate ask for the same t)."""
+        values are kept (step data and wear rate ask for the same t).
+
+        Values within round-off of zero are zero: a v* that vanishes at a level (the
+        zeros of ``cos(2 pi t)`` evaluate to about 1e-16) gives no friction and no wear
+        there (docs/method.md, section 3b), not the full friction of a round-off sign.
+        Round-off is :data:`VELOCITY_ROUNDOFF` times the largest ``|v*|`` of the time
+        grid.
+        """
         if self._vt is None or self._vt[0] != t:
             cb = self.contact
-            self._vt = (t, tangential_velocity(self.problem.parts, cb.part, cb.tangents, t))
+            v = tangential_velocity(self.problem.parts, cb.part, cb.tangents, t)
+            v[np.abs(v) <= self._velocity_roundoff] = 0.0
+            self._vt = (t, v)
         return self._vt[1]
+
+    @functools.cached_property
+    def _velocity_roundoff(self) -> float:
+        t = np.asarray(self.problem.time.t, dtype=np.float64)
+        scale = max(
+            (
+                float(np.abs(velocity_levels(pc.velocity, t)).max(initial=0.0))
+                for pc in self.problem.parts
+            ),
+            default=0.0,
+        )
+        return VELOCITY_ROUNDOFF * scale
 
     def step_data(self, level: int, w: NDArray[np.float64]) -> StepData:
         """The step problem of a level with the wear ``w`` (= w^n)."""
