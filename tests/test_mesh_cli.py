@@ -497,3 +497,103 @@ def test_every_generator_of_vemwear_mesh_is_registered() -> None:
     ]
     assert len(generators) >= 9
     assert not [n for n in generators if n not in names]
+
+
+# ----------------------------------------------------------------------------- 3D meshes
+def test_generate_inspect_plot_convert_3d(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from vemwear.mesh.io3d import read_mesh3d
+    from vemwear.mesh.registry3d import generate_mesh3d
+
+    box = tmp_path / "box.vtu"
+    argv = ["--divisions", "4", "2", "2", "--size", "2", "1", "1"]
+    assert main(["mesh", "generate", "hexahedra", "-o", str(box), *argv]) == 0
+    out = capsys.readouterr().out
+    assert f"wrote {box}" in out and "16 cells (6 faces 16)" in out
+    m = read_mesh3d(box)
+    assert m.n_cells == 16 and m.part_counts()["zmin"] == 8
+    expected = generate_mesh3d("hexahedra", divisions=(4, 2, 2))
+    np.testing.assert_array_equal(m.points, expected.points)
+
+    vor = tmp_path / "v.vtu"
+    argv = ["--cells", "12", "--seed", "1", "--param", "lloyd_iterations=2"]
+    assert main(["mesh", "generate", "voronoi3d", "-o", str(vor), *argv]) == 0
+    assert read_mesh3d(vor).n_cells == 12
+    capsys.readouterr()
+
+    assert main(["mesh", "inspect", str(box)]) == 0
+    out = capsys.readouterr().out
+    for phrase in (
+        "valid 3D mesh",
+        "cells           16 (6 faces 16)",
+        "boundary faces  40: xmin 4, xmax 4, ymin 8, ymax 8, zmin 8, zmax 8, untagged 0",
+        "valid (vertices, faces, cells, conformity)",
+        "boundary parts  complete",
+        "Mesh quality (3D)",
+    ):
+        assert phrase in out, phrase
+    assert main(["mesh", "inspect", str(vor), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["dim"] == 3 and d["cells"] == 12 and d["valid"]
+    assert d["volume"] == pytest.approx(2.0) and d["boundary_faces"]["untagged"] == 0
+
+    assert main(["mesh", "convert", str(vor), str(tmp_path / "w.vtu")]) == 0
+    a, b = read_mesh3d(vor), read_mesh3d(tmp_path / "w.vtu")
+    np.testing.assert_array_equal(a.points, b.points)
+    np.testing.assert_array_equal(a.boundary_tags, b.boundary_tags)
+    assert main(["mesh", "plot", str(box), "-o", str(tmp_path / "b.png")]) == 0
+    assert (tmp_path / "b.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "wrote" in capsys.readouterr().out
+
+
+def test_3d_config_inspect_and_convert(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    cfg = tmp_path / "c.toml"
+    text = (ROOT / "src" / "vemwear" / "examples" / "example_3d.toml").read_text()
+    cfg.write_text(text.replace("divisions = [16, 8, 8]", "divisions = [4, 2, 2]"))
+    assert main(["mesh", "inspect", str(cfg)]) == 0
+    out = capsys.readouterr().out
+    assert "cells           16" in out and "boundary faces" in out and "contact 8" in out
+    assert main(["mesh", "convert", str(cfg), str(tmp_path / "c.vtu")]) == 0
+    assert "16 cells" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["generate", "hexahedra", "-o", "{d}/b.vtu", "--size", "2", "1"],
+            "--size takes 3 numbers (LX LY LZ) for the 3D family 'hexahedra', got 2",
+        ),
+        (
+            ["generate", "squares", "-o", "{d}/b.vtu", "--size", "2", "1", "1"],
+            "--size takes 2 numbers (LX LY) for the 2D family 'squares', got 3",
+        ),
+        (
+            ["generate", "voronoi3d", "-o", "{d}/b.vtu", "--divisions", "2", "2", "2"],
+            "family 'voronoi3d' does not take --divisions; give --cells N",
+        ),
+        (
+            ["generate", "hexahedra", "-o", "{d}/b.msh", "--divisions", "2", "1", "1"],
+            "writing polyhedral (3D) meshes as .msh is not supported; write .vtu instead",
+        ),
+        (
+            ["generate", "hexahedra", "-o", "{d}/b.vtu", "--refine-contact", "1"],
+            "--refine-contact applies to 2D families only",
+        ),
+        (["convert", "{d}/box.vtu", "{d}/box.msh"], "write .vtu instead"),
+        (["plot", "{d}/box.vtu", "-o", "{d}/q.png", "--quality"], "--quality is for 2D meshes"),
+    ],
+)
+def test_3d_errors_are_one_line_exit_2(
+    argv: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from vemwear.mesh.io3d import write_mesh3d
+    from vemwear.mesh.registry3d import generate_mesh3d
+
+    write_mesh3d(generate_mesh3d("hexahedra", divisions=(2, 1, 1)), tmp_path / "box.vtu")
+    args = [a.replace("{d}", str(tmp_path)) for a in argv]
+    assert main(["mesh", *args]) == 2
+    line = error_line(capsys)
+    assert message in line, line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["box.vtu"]  # nothing written
