@@ -115,3 +115,35 @@ def npz_arrays(out: Path) -> dict[str, np.ndarray]:
     """Every array of ``out/result.npz``."""
     with np.load(out / "result.npz", allow_pickle=False) as z:
         return {k: z[k] for k in z.files}
+
+
+#: A small 3D configuration: the 3D analogue of the paper's data on 4 x 2 x 2
+#: hexahedra, 8 steps; ``[output]`` last, so that tests can append keys to it.
+CONFIG_3D = """
+title = "3d small"
+[mesh]
+generator = "hexahedra"
+size = [2.0, 1.0, 1.0]
+divisions = [4, 2, 2]
+[boundary]
+clamped = "xmin"
+contact = "zmin"
+free = "rest"
+[material]
+lam = 4.0
+eta = 4.0
+[loads]
+f1 = [0.0, 0.0, -0.06]
+[contact]
+p = { type = "linear", c = 0.4 }
+g = 0.1
+mu = 0.2
+kappa = 2.0
+v_star = [1.0, 0.0, 0.0]
+[time]
+T = 1.0
+steps = 8
+[solver]
+backend = "scipy"
+[output]
+"""

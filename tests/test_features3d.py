@@ -16,43 +16,14 @@ from typing import Any
 import numpy as np
 import pytest
 
-from conftest import npz_arrays
+from conftest import CONFIG_3D, npz_arrays
 from vemwear.cli.main import main
 from vemwear.config import ConfigError, parse_config
 from vemwear.simulate import TimeGrid, simulate
 from vemwear.simulate.cycles import CycleJump, simulate_cycles
 from vemwear.vem.space import has_part
 
-BASE = """
-title = "3d features"
-[mesh]
-generator = "hexahedra"
-size = [2.0, 1.0, 1.0]
-divisions = [4, 2, 2]
-[boundary]
-clamped = "xmin"
-contact = "zmin"
-free = "rest"
-[material]
-lam = 4.0
-eta = 4.0
-[loads]
-f1 = [0.0, 0.0, -0.06]
-[contact]
-p = { type = "linear", c = 0.4 }
-g = 0.1
-mu = 0.2
-kappa = 2.0
-v_star = [1.0, 0.0, 0.0]
-[time]
-T = 1.0
-steps = 8
-[solver]
-backend = "scipy"
-[output]
-figures = false
-vtk = false
-"""
+BASE = CONFIG_3D + "figures = false\nvtk = false\n"
 
 
 def base() -> dict[str, Any]:

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import npz_arrays
+from conftest import CONFIG_3D, npz_arrays
 from vemwear.cli.main import main
 from vemwear.config import ConfigError, load_config, parse_config
 from vemwear.mesh.io3d import write_mesh3d
@@ -20,35 +20,7 @@ from vemwear.post import load_result
 from vemwear.post.results import mesh_from_arrays, result_from_arrays
 from vemwear.simulate import simulate
 
-CONFIG = """
-title = "3d small"
-[mesh]
-generator = "hexahedra"
-size = [2.0, 1.0, 1.0]
-divisions = [4, 2, 2]
-[boundary]
-clamped = "xmin"
-contact = "zmin"
-free = "rest"
-[material]
-lam = 4.0
-eta = 4.0
-[loads]
-f1 = [0.0, 0.0, -0.06]
-[contact]
-p = { type = "linear", c = 0.4 }
-g = 0.1
-mu = 0.2
-kappa = 2.0
-v_star = [1.0, 0.0, 0.0]
-[time]
-T = 1.0
-steps = 8
-[solver]
-backend = "scipy"
-[output]
-times = [0.5, 1.0]
-"""
+CONFIG = CONFIG_3D + "times = [0.5, 1.0]\n"
 
 
 @pytest.fixture
