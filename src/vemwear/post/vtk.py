@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import quoteattr
@@ -171,16 +171,7 @@ def write_vtk_series(
     Path
         The ``.pvd`` file.
     """
-    if not name or os.sep in name or (os.altsep and os.altsep in name):
-        raise ValueError(f"vtk: series name must be a plain file name, got {name!r}")
-    out = Path(outdir)
-    sub = out / name
-    sub.mkdir(parents=True, exist_ok=True)
     mesh = result.problem.mesh
-    L = len(result.t)
-    # by default every level whose displacement was stored
-    chosen = [int(v) for v in result.u_levels] if levels is None else _levels(levels, L)
-    width = max(4, len(str(L - 1)))
     projection = Projection(mesh)
     from .quadratic import has_quadratic_dofs, refined_level_fields, refined_mesh
 
@@ -193,9 +184,8 @@ def write_vtk_series(
         base = meshio.Mesh(pts3, [("triangle", refined.triangles)])
         order = [np.arange(len(refined.triangles))]
     cell_id = [ids.astype(np.int64) for ids in order] if refined is None else [refined.parent]
-    entries: list[tuple[float, str]] = []
-    written: set[str] = set()
-    for lv in chosen:
+
+    def write_level(lv: int, path: Path) -> None:
         point_data, cells = (
             level_fields(result, lv, projection)
             if refined is None
@@ -206,8 +196,36 @@ def write_vtk_series(
         }
         cell_data["cell_id"] = cell_id
         m = meshio.Mesh(base.points, base.cells, point_data=point_data, cell_data=cell_data)
+        meshio.write(path, m, file_format="vtu")
+
+    return write_series(result, outdir, levels, name, write_level)
+
+
+def write_series(
+    result: Result,
+    outdir: str | os.PathLike[str],
+    levels: Iterable[int] | None,
+    name: str,
+    write_level: Callable[[int, Path], None],
+) -> Path:
+    """A ParaView series of ``result``: ``write_level(level, path)`` writes the ``.vtu`` of
+    each chosen level into ``outdir/<name>/``; stale ``<name>_<digits>.vtu`` files there
+    are removed and ``outdir/<name>.pvd`` is written last, atomically (the skeleton of
+    :func:`write_vtk_series` and of the 3D series of :mod:`vemwear.post.vtk3d`)."""
+    if not name or os.sep in name or (os.altsep and os.altsep in name):
+        raise ValueError(f"vtk: series name must be a plain file name, got {name!r}")
+    out = Path(outdir)
+    sub = out / name
+    sub.mkdir(parents=True, exist_ok=True)
+    L = len(result.t)
+    # by default every level whose displacement was stored
+    chosen = [int(v) for v in result.u_levels] if levels is None else _levels(levels, L)
+    width = max(4, len(str(L - 1)))
+    entries: list[tuple[float, str]] = []
+    written: set[str] = set()
+    for lv in chosen:
         fname = f"{name}_{lv:0{width}d}.vtu"
-        meshio.write(sub / fname, m, file_format="vtu")
+        write_level(lv, sub / fname)
         written.add(fname)
         entries.append((float(result.t[lv]), f"{name}/{fname}"))
     pattern = re.compile(re.escape(name) + r"_\d+\.vtu")

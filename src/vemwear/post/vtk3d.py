@@ -14,7 +14,6 @@ the projection ``Pi u``, ``sigma = 2 eta eps + lam tr(eps) I``), ``von_mises`` a
 from __future__ import annotations
 
 import os
-import re
 from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -23,8 +22,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..mesh.io3d import write_mesh3d
-from ..util.atomic import atomic_file, write_atomic
-from .vtk import _levels, _pvd_text
+from ..util.atomic import atomic_file
+from .vtk import write_series
 
 if TYPE_CHECKING:
     from ..simulate.loop import Result
@@ -93,28 +92,11 @@ def write_vtk_series3d(
     Path
         The ``.pvd`` file.
     """
-    if not name or os.sep in name or (os.altsep and os.altsep in name):
-        raise ValueError(f"vtk: series name must be a plain file name, got {name!r}")
-    out = Path(outdir)
-    sub = out / name
-    sub.mkdir(parents=True, exist_ok=True)
     mesh = result.problem.mesh
-    L = len(result.t)
-    chosen = [int(v) for v in result.u_levels] if levels is None else _levels(levels, L)
-    width = max(4, len(str(L - 1)))
-    entries: list[tuple[float, str]] = []
-    written: set[str] = set()
-    for lv in chosen:
+
+    def write_level(lv: int, path: Path) -> None:
         point_data, cell_data = level_fields3d(result, lv)
-        fname = f"{name}_{lv:0{width}d}.vtu"
-        with atomic_file(sub / fname) as tmp:
+        with atomic_file(path) as tmp:
             write_mesh3d(mesh, tmp, point_data, cell_data)  # type: ignore[arg-type]
-        written.add(fname)
-        entries.append((float(result.t[lv]), f"{name}/{fname}"))
-    pattern = re.compile(re.escape(name) + r"_\d+\.vtu")
-    for stale in sub.iterdir():
-        if stale.is_file() and pattern.fullmatch(stale.name) and stale.name not in written:
-            stale.unlink()
-    pvd = out / f"{name}.pvd"
-    write_atomic(pvd, _pvd_text(entries))
-    return pvd
+
+    return write_series(result, outdir, levels, name, write_level)
