@@ -30,7 +30,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .polymesh import PARTS, MeshError
+from .polymesh import PARTS, MeshError, checked_tags
 
 __all__ = ["Mesh3D"]
 
@@ -124,17 +124,7 @@ class Mesh3D:
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
         nb = len(self.boundary_faces)
-        tags = self.boundary_tags
-        tags = np.zeros(nb, dtype=np.int8) if tags is None else np.asarray(tags, np.int8)
-        if tags.shape != (nb,):
-            raise MeshError(f"boundary_tags must have shape ({nb},), got {tags.shape}")
-        names = tuple(str(n) for n in self.part_names)
-        if len(set(names)) != len(names) or len(names) > 127:
-            raise MeshError(f"part_names must be at most 127 distinct names, got {names}")
-        if np.any((tags < 0) | (tags > len(names))):
-            raise MeshError(f"boundary_tags must be codes 0..{len(names)}")
-        tags = np.ascontiguousarray(tags)
-        tags.setflags(write=False)
+        tags, names = checked_tags(self.boundary_tags, nb, self.part_names)
         object.__setattr__(self, "boundary_tags", tags)
         object.__setattr__(self, "part_names", names)
 

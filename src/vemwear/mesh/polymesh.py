@@ -48,6 +48,24 @@ class MeshError(ValueError):
     """A mesh that is not valid for the method; the message names cells or vertices."""
 
 
+def checked_tags(
+    tags: ArrayLike | None, n: int, part_names: Sequence[str]
+) -> tuple[NDArray[np.int8], tuple[str, ...]]:
+    """The read-only part codes of ``n`` boundary facets (all 0 if ``tags`` is None) and
+    the part names, checked: one code per facet, codes ``0..len(part_names)``, at most
+    127 distinct names (2D edges and 3D faces alike)."""
+    t = np.zeros(n, dtype=np.int8) if tags is None else np.array(tags, dtype=np.int8)
+    if t.shape != (n,):
+        raise MeshError(f"boundary_tags must have shape ({n},), got {t.shape}")
+    names = tuple(str(x) for x in part_names)
+    if len(set(names)) != len(names) or len(names) > 127:
+        raise MeshError(f"part_names must be at most 127 distinct names, got {names}")
+    if np.any((t < 0) | (t > len(names))):
+        raise MeshError(f"boundary_tags must be codes 0..{len(names)}")
+    t.setflags(write=False)
+    return t, names
+
+
 @dataclass(frozen=True, eq=False)
 class Mesh:
     """Polygonal mesh with tagged boundary edges.
@@ -100,20 +118,8 @@ class Mesh:
         object.__setattr__(self, "cell_vertices", cv)
         for arr in (pts, off, cv):
             arr.setflags(write=False)
-        tags = self.boundary_tags
-        nb = len(self.boundary_edges)
-        if tags is None:
-            tags = np.zeros(nb, dtype=np.int8)
-        tags = np.ascontiguousarray(tags, dtype=np.int8)
-        if tags.shape != (nb,):
-            raise MeshError(f"boundary_tags must have shape ({nb},), got {tags.shape}")
-        names = tuple(str(n) for n in self.part_names)
-        if len(set(names)) != len(names) or len(names) > 127:
-            raise MeshError(f"part_names must be at most 127 distinct names, got {names}")
-        if np.any((tags < 0) | (tags > len(names))):
-            raise MeshError(f"boundary_tags must be codes 0..{len(names)}")
+        tags, names = checked_tags(self.boundary_tags, len(self.boundary_edges), self.part_names)
         object.__setattr__(self, "part_names", names)
-        tags.setflags(write=False)
         object.__setattr__(self, "boundary_tags", tags)
 
     # ------------------------------------------------------------------ construction

@@ -108,7 +108,24 @@ def level_fields(
     u = np.asarray(result.displacement(level))
     disp = np.zeros((n, 3))
     disp[:, :2] = u
-    point_data: dict[str, NDArray[np.float64]] = {"displacement": disp}
+    point_data = {"displacement": disp, **contact_point_data(result, level, n, nodes, vert)}
+    proj = projection if projection is not None else Projection(mesh)
+    strain, stress, vm = cell_strain_stress(mesh, u, result.problem.material, proj)
+    cells = {"strain": strain.reshape(-1, 9), "stress": stress.reshape(-1, 9), "von_mises": vm}
+    return point_data, cells
+
+
+def contact_point_data(
+    result: Result,
+    level: int,
+    n: int,
+    nodes: NDArray[np.int64],
+    keep: NDArray[np.bool_] | slice = slice(None),
+) -> dict[str, NDArray[np.float64]]:
+    """The contact arrays of a stored level as point data of ``n`` vertices (0 off
+    Gamma_C), and the indicator ``contact``; ``keep`` selects the contact nodes that are
+    the vertices ``nodes`` (k = 2: not the edge midpoints)."""
+    out: dict[str, NDArray[np.float64]] = {}
     for key, arr in (
         ("wear", result.wear),
         ("u_nu", result.u_nu),
@@ -117,15 +134,12 @@ def level_fields(
         ("p", result.p_soft),
     ):
         full = np.zeros(n)
-        full[nodes] = np.asarray(arr[level])[vert]
-        point_data[key] = full
+        full[nodes] = np.asarray(arr[level])[keep]
+        out[key] = full
     contact = np.zeros(n)
     contact[nodes] = 1.0
-    point_data["contact"] = contact
-    proj = projection if projection is not None else Projection(mesh)
-    strain, stress, vm = cell_strain_stress(mesh, u, result.problem.material, proj)
-    cells = {"strain": strain.reshape(-1, 9), "stress": stress.reshape(-1, 9), "von_mises": vm}
-    return point_data, cells
+    out["contact"] = contact
+    return out
 
 
 def _pvd_text(entries: list[tuple[float, str]]) -> str:

@@ -23,7 +23,8 @@ from numpy.typing import NDArray
 
 from ..mesh.io3d import write_mesh3d
 from ..util.atomic import atomic_file
-from .vtk import write_series
+from ..vem.local import strain_stress
+from .vtk import contact_point_data, write_series
 
 if TYPE_CHECKING:
     from ..simulate.loop import Result
@@ -39,27 +40,10 @@ def level_fields3d(
     n = pr.mesh.n_points
     nodes = np.asarray(result.contact_nodes)
     u = np.asarray(result.displacement(level), dtype=float)
-    point_data: dict[str, NDArray[np.float64]] = {"displacement": u}
-    for key, arr in (
-        ("wear", result.wear),
-        ("u_nu", result.u_nu),
-        ("penetration", result.penetration),
-        ("lam", result.p_rigid),
-        ("p", result.p_soft),
-    ):
-        full = np.zeros(n)
-        full[nodes] = np.asarray(arr[level])
-        point_data[key] = full
-    contact = np.zeros(n)
-    contact[nodes] = 1.0
-    point_data["contact"] = contact
+    point_data = {"displacement": u, **contact_point_data(result, level, n, nodes)}
     E = pr.space.projection(pr.material, u).strain  # type: ignore[union-attr, arg-type]
-    lam, eta = pr.material.lam, pr.material.eta
-    tr = np.trace(E, axis1=1, axis2=2)
-    S = 2.0 * eta * E + lam * tr[:, None, None] * np.eye(3)
-    d = S - np.trace(S, axis1=1, axis2=2)[:, None, None] * np.eye(3) / 3.0
-    vm = np.sqrt(1.5 * np.einsum("kij,kij->k", d, d))
-    cells = {"strain": E.reshape(-1, 9), "stress": S.reshape(-1, 9), "von_mises": vm}
+    strain, stress, vm = strain_stress(E, pr.material)
+    cells = {"strain": strain.reshape(-1, 9), "stress": stress.reshape(-1, 9), "von_mises": vm}
     return point_data, cells
 
 

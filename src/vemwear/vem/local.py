@@ -56,18 +56,22 @@ class Material:
 def strain_stress(
     E: NDArray[np.float64], material: Material
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """The 3x3 strain, plane-strain stress ``sigma = 2 eta eps + lam tr(eps) I`` and von
-    Mises stress of 2x2 strains ``E`` (q, 2, 2)."""
-    tr = E[:, 0, 0] + E[:, 1, 1]
+    """The 3x3 strain, stress ``sigma = 2 eta eps + lam tr(eps) I`` and von Mises stress
+    of strains ``E``: (q, 2, 2) in 2D (plane strain: eps_zz = 0, sigma_zz = lam tr) or
+    (q, 3, 3) in 3D."""
+    d = E.shape[1]
+    tr = np.trace(E, axis1=1, axis2=2)
     lam, eta = float(material.lam), float(material.eta)
     strain = np.zeros((len(E), 3, 3))
-    strain[:, :2, :2] = E
+    strain[:, :d, :d] = E
     stress = 2.0 * eta * strain
-    stress[:, 0, 0] += lam * tr
-    stress[:, 1, 1] += lam * tr
-    stress[:, 2, 2] = lam * tr
+    for i in range(3):
+        stress[:, i, i] += lam * tr
     sxx, syy, szz, sxy = stress[:, 0, 0], stress[:, 1, 1], stress[:, 2, 2], stress[:, 0, 1]
-    vm = np.sqrt(0.5 * ((sxx - syy) ** 2 + (syy - szz) ** 2 + (szz - sxx) ** 2) + 3.0 * sxy**2)
+    shear = 3.0 * (stress[:, 1, 2] ** 2 + stress[:, 0, 2] ** 2)  # 0 in plane strain
+    vm = np.sqrt(
+        0.5 * ((sxx - syy) ** 2 + (syy - szz) ** 2 + (szz - sxx) ** 2) + 3.0 * sxy**2 + shear
+    )
     return strain, stress, vm
 
 
