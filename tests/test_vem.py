@@ -13,6 +13,7 @@ import pytest
 import scipy.sparse.linalg as spla
 from scipy.spatial import Voronoi
 
+from conftest import moments
 from vemwear.mesh import Mesh, check_mesh, tag_rectangle
 from vemwear.vem import (
     STABILIZATIONS,
@@ -37,23 +38,6 @@ def shoelace(X):
     X = X - X[0]
     x, y = X[:, 0], X[:, 1]
     return 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
-
-
-def moments(X):
-    """Integrals of 1, x, y, x^2, xy, y^2 over a simple polygon by Green's formula."""
-    x, y = X[:, 0], X[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
-    c = x * yn - xn * y
-    return np.array(
-        [
-            c.sum() / 2,
-            np.sum(c * (x + xn)) / 6,
-            np.sum(c * (y + yn)) / 6,
-            np.sum(c * (x * x + x * xn + xn * xn)) / 12,
-            np.sum(c * (x * yn + 2 * x * y + 2 * xn * yn + xn * y)) / 24,
-            np.sum(c * (y * y + y * yn + yn * yn)) / 12,
-        ]
-    )
 
 
 def centroid(X):
