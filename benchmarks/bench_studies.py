@@ -8,7 +8,8 @@ directory:
 - study: ``vemwear.studies.sweep`` on the LocalCluster a sweep makes (W single-threaded
   workers; the cluster's start is timed apart from the sweep).
 
-Reported: wall times, the study's overhead per run (W x study wall / N minus the serial
+The two run ``--repeat`` times, interleaved, on one cluster. Reported: min / median /
+max wall times, the study's overhead per run (W x study wall / N minus the serial
 time per run), the speed-up (with and without the cluster's start), and the start-up
 cost of a run: a worker's one-time preparation (imports, BLAS limits) and, within each
 run, what comes before the time loop (configuration, output directory; assembly and
@@ -16,6 +17,7 @@ factorization from ``summary.json``), which a sweep axis that changes neither th
 nor the material could share between runs. Not a test: no time is asserted.
 
     python benchmarks/bench_studies.py [--runs 64] [--workers 2] [--steps 64] [--n 16]
+        [--repeat 3] [--chunk N]
 """
 
 from __future__ import annotations
@@ -81,12 +83,18 @@ def serial(study, root: Path) -> tuple[float, list[dict[str, float]]]:
     return time.perf_counter() - t0, parts
 
 
+def _stats(v: list[float], scale: float = 1.0) -> str:
+    return " ".join(f"{scale * x:7.3f}" for x in (min(v), statistics.median(v), max(v)))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=64)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--steps", type=int, default=64)
     ap.add_argument("--n", type=int, default=16, help="squares per unit length (1/h)")
+    ap.add_argument("--repeat", type=int, default=3, help="interleaved repeats")
+    ap.add_argument("--chunk", type=int, default=None, help="runs per task (default: auto)")
     args = ap.parse_args()
 
     from vemwear.studies import load_study, sweep
@@ -104,39 +112,62 @@ def main() -> None:
         t = time.perf_counter()
         prepare_worker()  # the serial loop gets the same imports, outside its timing
         prep = time.perf_counter() - t
-        study = load_study(tmp / "study.toml")
-        S, parts = serial(study, tmp / "serial")
+        import h5netcdf  # noqa: F401  the study's writer: imports are not timed either
+        import xarray  # noqa: F401
 
+        study = load_study(tmp / "study.toml")
         t = time.perf_counter()
         with study_client(workers=args.workers, say=None) as client:  # what sweep makes
             C = time.perf_counter() - t
-            t = time.perf_counter()
-            ds = sweep(study, tmp / "study", client=client, progress=False, figures=False)
-            W = time.perf_counter() - t
-        assert int(ds.attrs["runs_computed"]) == args.runs and int(ds.attrs["runs_failed"]) == 0
-        wt = np.asarray(ds["wall_time"].values, dtype=float)
+            serial_wall, study_wall, parts, wt = [], [], [], []
+            for k in range(args.repeat):  # interleaved: serial, study, serial, ...
+                S, p = serial(study, tmp / f"serial{k}")
+                serial_wall.append(S)
+                parts += p
+                t = time.perf_counter()
+                ds = sweep(
+                    study,
+                    tmp / f"study{k}",
+                    client=client,
+                    progress=False,
+                    figures=False,
+                    chunk=args.chunk,
+                )
+                study_wall.append(time.perf_counter() - t)
+                assert int(ds.attrs["runs_computed"]) == args.runs
+                assert int(ds.attrs["runs_failed"]) == 0
+                wt += [float(x) for x in np.ravel(ds["wall_time"].values)]
+        S, W = statistics.median(serial_wall), statistics.median(study_wall)
         s = S / args.runs
         med = {k: statistics.median(p[k] for p in parts) for k in parts[0]}
         rows = [
-            ("runs", f"{args.runs} (h = 1/{args.n}, {args.steps} steps, {args.workers} workers)"),
-            ("serial: wall", f"{S:8.2f} s  ({1e3 * s:.1f} ms per run)"),
-            ("study: cluster start", f"{C:8.2f} s"),
-            ("study: sweep wall", f"{W:8.2f} s  (validation, tasks, study.nc)"),
             (
-                "study: task time per run",
-                f"{1e3 * float(np.median(wt)):8.1f} ms (median on the workers)",
+                "runs",
+                f"{args.runs} (h = 1/{args.n}, {args.steps} steps, {args.workers} workers, "
+                f"x {args.repeat} interleaved)",
             ),
+            ("", "    min     med     max"),
+            ("serial: wall [s]", _stats(serial_wall)),
+            ("study: sweep wall [s]", _stats(study_wall) + "  (tasks, study.nc)"),
+            ("study: cluster start [s]", f"{C:7.3f}  (once: workers, their imports)"),
+            ("serial: per run [ms]", _stats(serial_wall, 1e3 / args.runs)),
+            ("study: task time per run [ms]", _stats(wt, 1e3) + "  (on the workers)"),
             (
                 "overhead per run",
-                f"{1e3 * (args.workers * W / args.runs - s):8.1f} ms  (W x wall / N - serial per run)",
+                f"{1e3 * (args.workers * W / args.runs - s):7.1f} ms  "
+                "(W x wall / N - serial per run, medians)",
             ),
-            ("speed-up", f"{S / W:8.2f} x   (with the cluster start {S / (W + C):.2f} x)"),
-            ("worker preparation", f"{1e3 * prep:8.1f} ms once per worker (imports, BLAS limit)"),
-            ("per run: config", f"{1e3 * med['config']:8.1f} ms (load_config: mesh, problem)"),
-            ("per run: outdir", f"{1e3 * med['outdir']:8.1f} ms (prepare_run)"),
-            ("per run: setup", f"{1e3 * med['setup']:8.1f} ms (assembly, ordering, factorization)"),
-            ("per run: time loop", f"{1e3 * med['loop']:8.1f} ms"),
-            ("per run: run", f"{1e3 * med['run']:8.1f} ms (execute_run: loop + outputs)"),
+            (
+                "speed-up",
+                f"{S / W:7.2f} x  (medians; min/min {min(serial_wall) / min(study_wall):.2f} x; "
+                f"with the cluster start {S / (W + C):.2f} x)",
+            ),
+            ("worker preparation", f"{1e3 * prep:7.1f} ms once per worker (imports, BLAS limit)"),
+            ("per run: config", f"{1e3 * med['config']:7.1f} ms (load_config: mesh, problem)"),
+            ("per run: outdir", f"{1e3 * med['outdir']:7.1f} ms (prepare_run)"),
+            ("per run: setup", f"{1e3 * med['setup']:7.1f} ms (assembly, ordering, factorization)"),
+            ("per run: time loop", f"{1e3 * med['loop']:7.1f} ms"),
+            ("per run: run", f"{1e3 * med['run']:7.1f} ms (execute_run: loop + outputs)"),
         ]
         w = max(len(a) for a, _ in rows)
         print("\n".join(f"{a:<{w}}  {b}" for a, b in rows))

@@ -7,6 +7,7 @@ vemwear.runner, netCDF files read back by xarray.
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import socket
@@ -150,6 +151,29 @@ def test_sweep_on_the_default_local_cluster(tmp_path: Path) -> None:
     assert sorted(p.name for p in (out / "runs").iterdir()) == sorted(ids)
     assert all((out / "configs" / f"{i}.toml").is_file() for i in ids)
     back.close()
+
+
+def test_a_failing_run_is_retried_then_recorded_and_the_others_go_on(tmp_path: Path) -> None:
+    """A run that cannot converge (tol below round-off) fails on both tries; the other
+    runs of its task and of the study finish; the record and the Dataset name the error."""
+    from vemwear.studies import sweep
+
+    path = _study(
+        tmp_path,
+        '[axes]\n"solver.tol" = [1e-10, 1e-30, 1e-9]\n[overrides]\n"time.steps" = 4\n',
+    )
+    out = tmp_path / "out"
+    ds = sweep(path, out, workers=1, progress=False, figures=False, chunk=3)
+    assert ds.attrs["runs_computed"] == 2 and ds.attrs["runs_failed"] == 1
+    status = list(ds["status"].values)
+    assert status == ["done", "failed", "done"], status
+    error = str(ds["error"].values[1])
+    assert "did not converge" in error and "time level" in error, error
+    assert np.isnan(ds["max_wear"].values[1]) and np.all(ds["max_wear"].values[[0, 2]] > 0)
+    rid = str(ds["run_id"].values[1])
+    rec = json.loads((out / "log" / f"{rid}.json").read_text())
+    assert rec["status"] == "failed" and "did not converge" in rec["error"]
+    assert not (out / "runs" / rid / "result.npz").exists()
 
 
 # ---------------------------------------------------------------------------- dask scheduler
@@ -333,7 +357,9 @@ def test_a_killed_worker_does_not_stop_the_study(
         base = small_config("case", divisions=(16, 8), steps=1000)
         path = _study(tmp_path, '[axes]\n"contact.kappa" = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]\n', base)
         out = tmp_path / "out"
-        cmd = [*VEMWEAR, "sweep", str(path), "-o", str(out), "--scheduler", address]
+        # two runs per task: the victim's task is rescheduled whole, and the run it
+        # may have finished is kept
+        cmd = [*VEMWEAR, "sweep", str(path), "-o", str(out), "--scheduler", address, "--chunk", "2"]
         proc = subprocess.Popen(
             [*cmd, "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
         )

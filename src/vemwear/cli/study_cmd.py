@@ -57,6 +57,13 @@ def setup_sweep(p: argparse.ArgumentParser) -> None:
         "finished runs are kept (a stopped study continues)",
     )
     _cluster(p, workers=True)
+    p.add_argument(
+        "--chunk",
+        type=positive_int,
+        metavar="N",
+        help="runs per Dask task (default: four or more tasks per worker, at most 16 runs "
+        "each); chunks save the scheduler's work when runs take milliseconds",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_debug_option(p)
     p.set_defaults(func=cmd_sweep)
@@ -105,6 +112,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         workers=args.workers,
         progress=not args.no_progress,
+        chunk=args.chunk,
         say=say,
     )
     a = ds.attrs

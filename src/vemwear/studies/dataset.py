@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 from .design import Study
 from .execute import RUNS_DIR, Execution
 
-__all__ = ["SCALARS", "STUDY_NC", "build_dataset", "write_dataset"]
+__all__ = ["SCALARS", "STUDY_NC", "build_dataset", "run_arrays", "write_dataset"]
 
 STUDY_NC = "study.nc"
 #: The scalar summaries per run.
@@ -79,12 +79,24 @@ _SKIP = ("u", "dofs", "points", "boundary_tags")
 _SKIP_PREFIXES = ("cell_", "face_")
 
 
+def _wanted(name: str) -> bool:
+    return name not in _SKIP and not name.startswith(_SKIP_PREFIXES)
+
+
+def run_arrays(result: Any) -> dict[str, NDArray[Any]]:
+    """The arrays of a run's ``result.npz`` that the Dataset uses, from its in-memory
+    result (a task hands them back, so the client does not read the file)."""
+    from ..post.results import result_arrays
+
+    return {k: v for k, v in result_arrays(result).items() if _wanted(k)}
+
+
 def _load(out: Path, rid: str) -> dict[str, NDArray[Any]] | None:
     from ..post.results import NPZ_NAME
 
     try:
         with np.load(out / RUNS_DIR / rid / NPZ_NAME, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files if k not in _SKIP and not k.startswith(_SKIP_PREFIXES)}
+            return {k: z[k] for k in z.files if _wanted(k)}
     except (OSError, ValueError):
         return None
 
@@ -132,7 +144,8 @@ def _arc_grid(results: Mapping[str, Mapping[str, NDArray[Any]]]) -> tuple[Any, s
 
 
 def build_dataset(study: Study, execution: Execution, out: str | Path) -> Any:
-    """The study's Dataset from the runs' outputs in ``out`` and their records.
+    """The study's Dataset from the runs' arrays (``execution.arrays``, else read from
+    their outputs in ``out``) and their records.
 
     Returns
     -------
@@ -163,7 +176,9 @@ def build_dataset(study: Study, execution: Execution, out: str | Path) -> Any:
     for r in study.runs:
         at = where(r.index)
         rec = execution.records.get(r.id, {})
-        res = _load(out, r.id) if rec.get("status") == "done" else None
+        res = None
+        if rec.get("status") == "done":
+            res = execution.arrays.get(r.id) or _load(out, r.id)
         status = "done" if res is not None else "failed"
         text["status"][at], text["run_id"][at] = status, r.id
         text["error"][at] = rec.get("error") or ("" if res is not None else "no result")

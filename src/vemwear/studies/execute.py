@@ -12,13 +12,17 @@ The layout of a study's output directory ``OUTDIR``:
     The record of the run's last attempt: parameters, ``status`` (``done`` or
     ``failed``), ``error``, ``wall_time``, the worker.
 
-Each run is one Dask task (:func:`run_task`) on a worker with one thread, its BLAS
-limited to one thread (the runs are the parallelism). A task that raises is retried
-once (Dask's ``retries``), then recorded as failed with its error; it never stops the
-others. The tasks of a worker that dies are rescheduled by Dask onto the others. A run
-whose directory holds a complete result is skipped, so a study stopped and started again
-only computes what is missing; a run stopped half-way resumes from its checkpoint.
-The output directory must be on a file system every worker sees.
+The runs go to Dask in chunks: one task (:func:`run_chunk`) runs a few runs one after
+the other (:func:`run_task` each) on a worker with one thread, its BLAS limited to one
+thread (the runs are the parallelism). Chunks keep the scheduler's work per run small
+when runs take milliseconds (Dask's overhead is about a millisecond of CPU per task on
+each side, taken from the cores that run the runs), and there are still several chunks
+per worker to balance the load. A run that raises is tried again once, then recorded
+as failed with its error; it never stops the others. The tasks of a worker that dies
+are rescheduled by Dask onto the others. A run whose directory holds a complete result
+is skipped, so a study stopped and started again only computes what is missing (also
+within a rescheduled chunk); a run stopped half-way resumes from its checkpoint. The
+output directory must be on a file system every worker sees.
 """
 
 from __future__ import annotations
@@ -45,10 +49,12 @@ __all__ = [
     "RUNS_DIR",
     "Execution",
     "RunFailed",
+    "chunk_size",
     "is_complete",
     "open_study_dir",
     "read_record",
     "run_all",
+    "run_chunk",
     "run_task",
     "study_client",
 ]
@@ -104,6 +110,7 @@ def study_client(
         except (OSError, TimeoutError, ValueError) as exc:
             raise StudyError(f"--scheduler {scheduler}: cannot connect: {exc}") from None
         try:
+            own.register_plugin(_worker_plugin(), name="vemwear")
             _tell_dashboard(own, say)
             yield own
         finally:
@@ -125,6 +132,8 @@ def study_client(
             )
         )
         own = stack.enter_context(Client(cluster))
+        # the workers import the library now, as part of the cluster's start
+        own.register_plugin(_worker_plugin(), name="vemwear")
         _tell_dashboard(own, say)
         yield own
 
@@ -160,14 +169,17 @@ def prepare_worker() -> None:
     """Limit the BLAS pools of this process to one thread; import what a run needs; keep
     the last factorization of the stiffness, so that runs that change only contact data,
     loads or the time grid (the usual sweep axes) reuse it
-    (:func:`vemwear.solvers.backends.keep_factorizations`)."""
+    (:func:`vemwear.solvers.backends.keep_factorizations`). The limit holds for the
+    worker's life: tasks do not set it again (threadpoolctl's scan of the loaded
+    libraries takes 1.5 ms, a tenth of a small run)."""
     from importlib import import_module
 
     from threadpoolctl import threadpool_limits
 
-    from ..solvers.backends import keep_factorizations
+    from ..solvers.backends import keep_factorizations, resolve_backend
 
     keep_factorizations(1)
+    resolve_backend("auto")  # loads MKL where PARDISO is installed, so that it is limited too
 
     for mod in (
         "vemwear.config.build",
@@ -250,9 +262,10 @@ def _wait_unlocked(rundir: Path) -> None:
         time.sleep(0.2)
 
 
-def _execute(config_path: Path, rundir: Path) -> None:
+def _execute(config_path: Path, rundir: Path) -> Any:
     """One run of ``config_path`` into ``rundir`` through :mod:`vemwear.runner`:
-    resumed from its checkpoint if a stopped attempt left one, else from the start."""
+    resumed from its checkpoint if a stopped attempt left one, else from the start.
+    Returns the result (None for a cycle-jump run, whose result is in its files)."""
     from ..config import load_config
     from ..runner import ResumeError, execute_run, prepare_run
     from ..runner.checkpoint import CHECKPOINT_NAME
@@ -268,26 +281,36 @@ def _execute(config_path: Path, rundir: Path) -> None:
         from ..runner.cycles import execute_cycles
 
         execute_cycles(plan, progress=False)
-        return
+        return None
     result = execute_run(plan, progress=False)
     if isinstance(result, str):  # the arrays did not fit in memory: result.h5 only
         raise RunFailed(result)
+    return result
 
 
-def run_task(rid: str, params: dict[str, Any], config_text: str, outdir: str) -> dict[str, Any]:
-    """Run one configuration into ``OUTDIR/runs/<rid>`` (a Dask task).
+#: What a task hands back besides the record: ``extract(result)``, e.g. the arrays the
+#: study's Dataset needs, so that the client does not read them back from the files.
+Extract = Callable[[Any], dict[str, Any]]
+
+
+def run_task(
+    rid: str,
+    params: dict[str, Any],
+    config_text: str,
+    outdir: str,
+    extract: Extract | None = None,
+) -> dict[str, Any]:
+    """Run one configuration into ``OUTDIR/runs/<rid>``.
 
     Returns the run's record (also written to ``OUTDIR/log/<rid>.json``), with
-    ``executed`` False if the directory already held a complete result.
+    ``executed`` False if the directory already held a complete result, and, with
+    ``extract``, ``arrays = extract(result)`` (not logged).
 
     Raises
     ------
     RunFailed
-        Naming the error of the run (Dask retries the task once, then the study
-        records the run as failed).
+        Naming the error of the run.
     """
-    from threadpoolctl import threadpool_limits
-
     out = Path(outdir)
     rundir = out / RUNS_DIR / rid
     config_path = out / CONFIGS_DIR / f"{rid}.toml"
@@ -308,14 +331,63 @@ def run_task(rid: str, params: dict[str, Any], config_text: str, outdir: str) ->
     try:
         if not config_path.is_file() or config_path.read_text(encoding="utf-8") != config_text:
             write_atomic(config_path, config_text)
-        with threadpool_limits(limits=1):
-            _execute(config_path, rundir)
+        result = _execute(config_path, rundir)
     except Exception as exc:
         note = getattr(exc, "vemwear_note", "")
         raise RunFailed(f"{type(exc).__name__}: {exc}{note}") from None
     rec.update(wall_time=time.perf_counter() - t0, executed=True)
     _write_record(out, rec)
+    if extract is not None and result is not None:
+        rec["arrays"] = extract(result)
     return rec
+
+
+def _failed(rid: str, params: dict[str, Any], msg: str) -> dict[str, Any]:
+    return {
+        "id": rid,
+        "params": params,
+        "status": "failed",
+        "error": msg,
+        "wall_time": float("nan"),
+        "executed": True,
+        "finished": datetime.now(UTC).isoformat(timespec="seconds"),
+    }
+
+
+def run_chunk(
+    runs: list[tuple[str, dict[str, Any], str]],
+    outdir: str,
+    retries: int = 1,
+    extract: Extract | None = None,
+) -> list[dict[str, Any]]:
+    """Run ``(id, params, config text)`` one after the other (a Dask task).
+
+    A run that raises is tried ``retries`` more times, then recorded as failed (its
+    record in ``OUTDIR/log``) and the chunk goes on: the task itself does not fail.
+
+    Returns
+    -------
+    list of dict
+        The records, in the order of ``runs``.
+    """
+    records = []
+    for rid, params, text in runs:
+        for attempt in range(retries + 1):
+            try:
+                rec = run_task(rid, params, text, outdir, extract)
+                break
+            except RunFailed as exc:
+                if attempt == retries:
+                    rec = _failed(rid, params, str(exc))
+                    _write_record(Path(outdir), rec)
+        records.append(rec)
+    return records
+
+
+def chunk_size(n_runs: int, n_threads: int) -> int:
+    """Runs per task: at least four tasks per worker thread (the load stays balanced
+    when the runs take different times), at most 16 runs per task."""
+    return max(1, min(16, n_runs // (4 * max(n_threads, 1))))
 
 
 # ---------------------------------------------------------------------------- the study
@@ -331,6 +403,8 @@ class Execution:
         Runs computed now, found complete from an earlier execution, failed.
     seconds : float
         Wall time of the execution.
+    arrays : dict
+        Run id -> what the task's ``extract`` returned, for the runs computed now.
     """
 
     records: dict[str, dict[str, Any]] = field(default_factory=dict)
@@ -338,6 +412,7 @@ class Execution:
     skipped: int = 0
     failed: int = 0
     seconds: float = 0.0
+    arrays: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
 def run_all(
@@ -347,18 +422,22 @@ def run_all(
     *,
     retries: int = 1,
     progress: bool = True,
+    chunk: int | None = None,
+    extract: Extract | None = None,
 ) -> Execution:
     """Run every run not yet complete in ``out`` on ``client``'s cluster.
 
-    Failed runs (after ``retries``) are recorded in ``out/log`` with their error; the
-    others go on. Ctrl-C cancels the tasks not yet started and re-raises.
+    The runs go in tasks of ``chunk`` runs (default :func:`chunk_size` of the cluster's
+    worker threads). Failed runs (after ``retries``) are recorded in ``out/log`` with
+    their error; the others go on. Ctrl-C cancels the tasks not yet started and
+    re-raises.
     """
     from distributed import as_completed
     from tqdm import tqdm
 
     t0 = time.perf_counter()
     ex = Execution()
-    if runs:
+    if runs:  # a client made by study_client has it already: the setup is then quick
         client.register_plugin(_worker_plugin(), name="vemwear")
     todo = []
     for r in runs:
@@ -375,6 +454,9 @@ def run_all(
             ex.skipped += 1
         else:
             todo.append(r)
+    if chunk is None:
+        threads = sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values())
+        chunk = chunk_size(len(todo), threads)
     bar = tqdm(
         total=len(runs),
         initial=ex.skipped,
@@ -383,44 +465,51 @@ def run_all(
         disable=not progress,
         file=sys.stderr,
     )
-    futures = {
-        client.submit(
-            run_task,
-            r.id,
-            r.params,
-            r.toml(),
+    futures = {}
+    for i in range(0, len(todo), chunk):
+        part = todo[i : i + chunk]
+        fut = client.submit(
+            run_chunk,
+            [(r.id, r.params, r.toml()) for r in part],
             str(out),
-            key=f"vemwear-run-{r.id}-{os.urandom(4).hex()}",
-            retries=retries,
+            retries,
+            extract,
+            key=f"vemwear-runs-{part[0].id}-{len(part)}-{os.urandom(4).hex()}",
+            retries=retries,  # a chunk fails only outside its runs (e.g. a lost result)
             pure=False,
-        ): r
-        for r in todo
-    }
+        )
+        futures[fut] = part
     try:
         for fut in as_completed(list(futures)):
-            r = futures[fut]
+            part = futures[fut]
             if fut.status == "finished":
-                rec = fut.result()
-                ex.computed += bool(rec.get("executed"))
-                ex.skipped += not rec.get("executed")
+                recs = fut.result()
             else:
+                # e.g. its workers died too often: the runs it finished are kept
                 err = fut.exception()
-                msg = str(err) if isinstance(err, RunFailed) else f"{type(err).__name__}: {err}"
-                rec = {
-                    "id": r.id,
-                    "params": r.params,
-                    "status": "failed",
-                    "error": msg,
-                    "wall_time": float("nan"),
-                    "executed": True,
-                    "finished": datetime.now(UTC).isoformat(timespec="seconds"),
-                }
-                _write_record(out, rec)
-                ex.failed += 1
-                bar.write(f"vemwear: run {r.id} ({params_text(r.params)}) failed: {msg}")
-            ex.records[r.id] = rec
+                msg = f"{type(err).__name__}: {err}"
+                recs = []
+                for r in part:
+                    if is_complete(out / RUNS_DIR / r.id):
+                        recs.append({**(read_record(out, r.id) or {}), "executed": True})
+                    else:
+                        recs.append(_failed(r.id, r.params, msg))
+                        _write_record(out, recs[-1])
+            for r, rec in zip(part, recs, strict=True):
+                arrays = rec.pop("arrays", None)
+                if arrays is not None:
+                    ex.arrays[r.id] = arrays
+                if rec["status"] == "failed":
+                    ex.failed += 1
+                    bar.write(
+                        f"vemwear: run {r.id} ({params_text(r.params)}) failed: {rec['error']}"
+                    )
+                else:
+                    ex.computed += bool(rec.get("executed"))
+                    ex.skipped += not rec.get("executed")
+                ex.records[r.id] = rec
             fut.release()
-            bar.update(1)
+            bar.update(len(part))
     except BaseException:
         client.cancel(list(futures))
         raise

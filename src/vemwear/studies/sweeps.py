@@ -26,6 +26,7 @@ def sweep(
     workers: int | None = None,
     progress: bool = True,
     retries: int = 1,
+    chunk: int | None = None,
     figures: bool = True,
     say: Callable[[str], None] | None = _stderr,
 ) -> Any:
@@ -54,6 +55,9 @@ def sweep(
         Show a progress bar over the runs.
     retries : int
         Retries of a failed run before it is recorded as failed (default 1).
+    chunk : int, optional
+        Runs per Dask task (default: at least four tasks per worker thread, at most 16
+        runs per task; :func:`vemwear.studies.execute.chunk_size`).
     figures : bool
         Write the figures and the report.
     say : callable or None
@@ -72,7 +76,7 @@ def sweep(
         An output directory that cannot be used.
     """
     from ..runner.outdir import output_lock, read_marker, write_marker
-    from .dataset import STUDY_NC, build_dataset, write_dataset
+    from .dataset import STUDY_NC, build_dataset, run_arrays, write_dataset
     from .execute import open_study_dir, run_all, study_client
 
     st = study if isinstance(study, Study) else load_study(study)
@@ -85,7 +89,15 @@ def sweep(
         state, names = "partial", ["study.toml"]
         try:
             with study_client(client, scheduler=scheduler, workers=workers, say=say) as c:
-                ex = run_all(st.runs, outdir, c, retries=retries, progress=progress)
+                ex = run_all(
+                    st.runs,
+                    outdir,
+                    c,
+                    retries=retries,
+                    progress=progress,
+                    chunk=chunk,
+                    extract=run_arrays,
+                )
             ds = build_dataset(st, ex, outdir)
             write_dataset(ds, outdir / STUDY_NC)
             names.append(STUDY_NC)
