@@ -5,6 +5,8 @@ from 1 to 10; no figures or ParaView output), each through vemwear.runner into i
 directory:
 
 - serial: one process, one run after the other (load_config, prepare_run, execute_run);
+- floor: W plain processes (no Dask), each running its share of the runs like the
+  serial loop, started together after their imports: what W busy cores can give;
 - study: ``vemwear.studies.sweep`` on the LocalCluster a sweep makes (W single-threaded
   workers; the cluster's start is timed apart from the sweep).
 
@@ -83,6 +85,54 @@ def serial(study, root: Path) -> tuple[float, list[dict[str, float]]]:
     return time.perf_counter() - t0, parts
 
 
+def _floor_worker(study_file: str, root: str, share: list[int], barrier, queue) -> None:
+    """One plain process of the floor: imports, then its share of the runs in a loop."""
+    from vemwear.studies import load_study
+    from vemwear.studies.execute import prepare_worker
+
+    prepare_worker()
+    study = load_study(study_file)
+    study.runs = [study.runs[i] for i in share]
+    barrier.wait()
+    t = time.perf_counter()
+    serial(study, Path(root))
+    queue.put(time.perf_counter() - t)
+
+
+def floor(study_file: Path, n_runs: int, root: Path, workers: int) -> float:
+    """The floor of a study on ``workers`` cores: as many plain processes, each running
+    its share of the runs in a loop (no Dask), started together once imported; the wall
+    time until the last one ends. What two busy cores cost each other (shared caches,
+    memory bandwidth, the machine's other work) is in it."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("spawn")
+    barrier, queue = ctx.Barrier(workers + 1), ctx.Queue()
+    procs = [
+        ctx.Process(
+            target=_floor_worker,
+            args=(
+                str(study_file),
+                str(root / f"w{i}"),
+                list(range(i, n_runs, workers)),
+                barrier,
+                queue,
+            ),
+        )
+        for i in range(workers)
+    ]
+    for pr in procs:
+        pr.start()
+    barrier.wait()
+    t = time.perf_counter()
+    for _ in procs:
+        queue.get()
+    wall = time.perf_counter() - t
+    for pr in procs:
+        pr.join()
+    return wall
+
+
 def _stats(v: list[float], scale: float = 1.0) -> str:
     return " ".join(f"{scale * x:7.3f}" for x in (min(v), statistics.median(v), max(v)))
 
@@ -119,11 +169,14 @@ def main() -> None:
         t = time.perf_counter()
         with study_client(workers=args.workers, say=None) as client:  # what sweep makes
             C = time.perf_counter() - t
-            serial_wall, study_wall, parts, wt = [], [], [], []
-            for k in range(args.repeat):  # interleaved: serial, study, serial, ...
+            serial_wall, study_wall, floor_wall, parts, wt = [], [], [], [], []
+            for k in range(args.repeat):  # interleaved: serial, floor, study, serial, ...
                 S, p = serial(study, tmp / f"serial{k}")
                 serial_wall.append(S)
                 parts += p
+                floor_wall.append(
+                    floor(tmp / "study.toml", args.runs, tmp / f"floor{k}", args.workers)
+                )
                 t = time.perf_counter()
                 ds = sweep(
                     study,
@@ -148,6 +201,10 @@ def main() -> None:
             ),
             ("", "    min     med     max"),
             ("serial: wall [s]", _stats(serial_wall)),
+            (
+                "floor: wall [s]",
+                _stats(floor_wall) + f"  ({args.workers} plain processes, no Dask)",
+            ),
             ("study: sweep wall [s]", _stats(study_wall) + "  (tasks, study.nc)"),
             ("study: cluster start [s]", f"{C:7.3f}  (once: workers, their imports)"),
             ("serial: per run [ms]", _stats(serial_wall, 1e3 / args.runs)),
@@ -161,6 +218,11 @@ def main() -> None:
                 "speed-up",
                 f"{S / W:7.2f} x  (medians; min/min {min(serial_wall) / min(study_wall):.2f} x; "
                 f"with the cluster start {S / (W + C):.2f} x)",
+            ),
+            (
+                "floor speed-up",
+                f"{S / statistics.median(floor_wall):7.2f} x  (serial / floor, medians: what "
+                f"{args.workers} busy cores give; study / floor {W / statistics.median(floor_wall):.2f})",
             ),
             ("worker preparation", f"{1e3 * prep:7.1f} ms once per worker (imports, BLAS limit)"),
             ("per run: config", f"{1e3 * med['config']:7.1f} ms (load_config: mesh, problem)"),

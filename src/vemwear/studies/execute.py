@@ -34,6 +34,7 @@ import os
 import socket
 import sys
 import time
+import weakref
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -110,7 +111,7 @@ def study_client(
         except (OSError, TimeoutError, ValueError) as exc:
             raise StudyError(f"--scheduler {scheduler}: cannot connect: {exc}") from None
         try:
-            own.register_plugin(_worker_plugin(), name="vemwear")
+            _prepare_workers(own)
             _tell_dashboard(own, say)
             yield own
         finally:
@@ -133,7 +134,7 @@ def study_client(
         )
         own = stack.enter_context(Client(cluster))
         # the workers import the library now, as part of the cluster's start
-        own.register_plugin(_worker_plugin(), name="vemwear")
+        _prepare_workers(own)
         _tell_dashboard(own, say)
         yield own
 
@@ -149,6 +150,18 @@ def _tell_dashboard(client: Any, say: Callable[[str], None] | None) -> None:
         note = " (install bokeh to serve it)"
     n = len(client.scheduler_info().get("workers", {}))
     say(f"vemwear: Dask: {n} workers; dashboard {client.dashboard_link}{note}")
+
+
+#: Clients whose workers have the plugin already (a client of study_client, or one that
+#: ran a study): registering it again costs a round trip to every worker per call.
+_PREPARED: weakref.WeakSet[Any] = weakref.WeakSet()
+
+
+def _prepare_workers(client: Any) -> None:
+    """Register the worker plugin on ``client``'s cluster once."""
+    if client not in _PREPARED:
+        client.register_plugin(_worker_plugin(), name="vemwear")
+        _PREPARED.add(client)
 
 
 def _worker_plugin() -> Any:
@@ -437,8 +450,8 @@ def run_all(
 
     t0 = time.perf_counter()
     ex = Execution()
-    if runs:  # a client made by study_client has it already: the setup is then quick
-        client.register_plugin(_worker_plugin(), name="vemwear")
+    if runs:
+        _prepare_workers(client)
     todo = []
     for r in runs:
         if is_complete(out / RUNS_DIR / r.id):
