@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -22,9 +23,13 @@ class ComplianceLaw:
     ----------
     lipschitz : float
         The Lipschitz constant ``L_p`` of H(p) (Theorem 3.4).
+    elementwise : bool
+        True when ``p`` acts entry by entry on arrays of any shape, the same numbers
+        as on each row (then several levels' penetrations are one call).
     """
 
     lipschitz: float
+    elementwise: ClassVar[bool] = False
 
     def __call__(self, r: ArrayLike) -> NDArray[np.float64]:  # pragma: no cover - interface
         raise NotImplementedError
@@ -52,6 +57,7 @@ class LinearCompliance(ComplianceLaw):
     """
 
     c: float
+    elementwise: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         if not np.isfinite(self.c) or self.c < 0:
@@ -94,6 +100,7 @@ class TableCompliance(ComplianceLaw):
     r: tuple[float, ...]
     p: tuple[float, ...]
     _slopes: NDArray[np.float64] = field(init=False, repr=False, compare=False)
+    elementwise: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         r = np.asarray(self.r, dtype=float)

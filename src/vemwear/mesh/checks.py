@@ -25,6 +25,19 @@ def _scale(mesh: Mesh) -> float:
     return float(max(np.max(ext), np.finfo(float).tiny))
 
 
+def _apart(points: NDArray[np.float64], tol: float) -> bool:
+    """True when no two points are within ``tol`` of each other, by sorting: the distinct
+    x coordinates more than ``tol`` apart, and the points of equal x more than ``tol``
+    apart in y (a close pair has close x and y). False: a closer look is needed."""
+    x, y = points[:, 0], points[:, 1]
+    xs = np.unique(x)
+    if len(xs) > 1 and np.diff(xs).min() <= tol:
+        return False
+    order = np.lexsort((y, x))  # by x, then y: a close pair of equal x is adjacent
+    same_x = x[order][1:] == x[order][:-1]
+    return not np.any(np.diff(y[order])[same_x] <= tol)
+
+
 def check_cells(mesh: Mesh, rtol: float = 1e-12) -> None:
     """Cells are counter-clockwise, non-degenerate, simple, with distinct vertices."""
     for _n, (ids, verts) in mesh.groups.items():
@@ -87,7 +100,10 @@ def check_vertices(mesh: Mesh, rtol: float = 1e-10) -> None:
     used[mesh.cell_vertices] = True
     if not np.all(used):
         raise MeshError(f"vertices {_ids(np.flatnonzero(~used))} belong to no cell (dangling)")
-    pairs = cKDTree(mesh.points).query_pairs(rtol * _scale(mesh), output_type="ndarray")
+    tol = rtol * _scale(mesh)
+    if _apart(mesh.points, tol):
+        return
+    pairs = cKDTree(mesh.points).query_pairs(tol, output_type="ndarray")
     if len(pairs):
         raise MeshError(f"duplicate vertices (same coordinates): pairs {_ids(pairs[:, :2])}")
 
@@ -147,13 +163,8 @@ def _check_nested_pieces(mesh: Mesh) -> None:
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    de, n = mesh.directed_edges, mesh.n_points
-    key = de[:, 0] * n + de[:, 1]
-    rev = de[:, 1] * n + de[:, 0]
-    order = np.argsort(key)
-    pos = np.clip(np.searchsorted(key[order], rev), 0, len(key) - 1)
-    twin = order[pos]
-    has = key[twin] == rev
+    twin = mesh.edge_twins
+    has = twin >= 0
     a, b = mesh.edge_cells[has], mesh.edge_cells[twin[has]]
     graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(mesh.n_cells, mesh.n_cells))
     npieces, piece = connected_components(graph, directed=False)

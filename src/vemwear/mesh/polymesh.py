@@ -26,6 +26,24 @@ from numpy.typing import ArrayLike, NDArray
 PARTS: tuple[str, ...] = ("clamped", "traction", "contact")
 UNTAGGED = 0
 
+#: The cached properties of a :class:`Mesh` that depend on its points and cells only: a
+#: mesh with other tags shares them (:meth:`Mesh.with_tags`, :meth:`Mesh.with_boundary`).
+_GEOMETRY = frozenset(
+    (
+        "cell_sizes",
+        "groups",
+        "directed_edges",
+        "edge_cells",
+        "edge_twins",
+        "_boundary_rows",
+        "boundary_edges",
+        "boundary_edge_cells",
+        "edges",
+        "cell_areas",
+        "cell_diameters",
+    )
+)
+
 
 def part_code(name: str, names: Sequence[str] = PARTS) -> int:
     """Integer code of a boundary part name among ``names`` (``clamped`` -> 1, ...)."""
@@ -195,16 +213,24 @@ class Mesh:
         return np.repeat(np.arange(self.n_cells), self.cell_sizes)
 
     @cached_property
-    def _boundary_rows(self) -> NDArray[np.int64]:
+    def edge_twins(self) -> NDArray[np.int64]:
+        """The row of :attr:`directed_edges` of each edge's reverse (the neighbouring
+        cell's side of an interior edge), -1 on the boundary."""
         de = self.directed_edges
         n = max(self.n_points, 1)
-        fwd = de[:, 0] * n + de[:, 1]
-        rev = np.sort(de[:, 1] * n + de[:, 0])
-        # an edge is interior when its reverse is another cell's edge (a sorted search;
-        # several times faster than np.isin on 10^5-10^6 edges)
-        pos = np.minimum(np.searchsorted(rev, fwd), len(rev) - 1)
-        is_boundary = rev[pos] != fwd
-        rows = np.flatnonzero(is_boundary)
+        key = de[:, 0] * n + de[:, 1]
+        order = np.argsort(key)
+        key = key[order]
+        rev = de[:, 1] * n + de[:, 0]
+        # a sorted search, several times faster than np.isin on 10^5-10^6 edges
+        pos = np.minimum(np.searchsorted(key, rev), len(key) - 1)
+        return np.where(key[pos] == rev, order[pos], -1)
+
+    @cached_property
+    def _boundary_rows(self) -> NDArray[np.int64]:
+        de = self.directed_edges
+        # an edge is interior when its reverse is another cell's edge
+        rows = np.flatnonzero(self.edge_twins < 0)
         # a canonical order (by first vertex, then second) makes tags reproducible
         order = np.lexsort((de[rows, 1], de[rows, 0]))
         return rows[order]
@@ -264,7 +290,15 @@ class Mesh:
     def with_tags(self, tags: ArrayLike, part_names: Sequence[str] | None = None) -> Mesh:
         """The same cells with other boundary tags (and part names)."""
         names = self.part_names if part_names is None else tuple(part_names)
-        return Mesh(self.points, self.cell_offsets, self.cell_vertices, np.asarray(tags), names)
+        return self._retagged(np.asarray(tags), names)
+
+    def _retagged(self, tags: NDArray[np.int8], names: tuple[str, ...]) -> Mesh:
+        """The same points and cells with other tags, sharing the cached geometry (the
+        boundary edges are found once per geometry, not once per tagging)."""
+        new = object.__new__(Mesh)
+        new.__dict__.update({k: v for k, v in self.__dict__.items() if k in _GEOMETRY})
+        Mesh.__init__(new, self.points, self.cell_offsets, self.cell_vertices, tags, names)
+        return new
 
     def part_vertices(self, name: str) -> NDArray[np.int64]:
         """Sorted ids of the vertices on the closure of a part."""
@@ -317,7 +351,7 @@ class Mesh:
             tags[hit & ~protected] = code
         for name in rest:
             tags[tags == UNTAGGED] = part_code(name, names)
-        return Mesh(self.points, self.cell_offsets, self.cell_vertices, tags, names)
+        return self._retagged(tags, names)
 
     # ------------------------------------------------------------------ geometry
     @cached_property

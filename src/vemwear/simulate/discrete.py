@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import warnings
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -37,6 +38,17 @@ class DataError(ValueError):
     """Data that give non-finite numbers (an overflow), named with the quantity."""
 
 
+@dataclasses.dataclass(frozen=True)
+class _Sliding:
+    """The tangential foundation velocity at one time and what the step data take from
+    it: the friction coefficients ``mu n* . tau_a`` and the wear rate ``alpha``."""
+
+    t: float
+    v: NDArray[np.float64]
+    fric: NDArray[np.float64]
+    alpha: NDArray[np.float64]
+
+
 @dataclasses.dataclass
 class _Reactions:
     """Operators of the reactions (:meth:`Discretization.resultants`)."""
@@ -45,11 +57,12 @@ class _Reactions:
     ET: NDArray[np.float64]
     ZN: NDArray[np.float64]
     ZT: NDArray[np.float64]
-    Nc: sp.csr_matrix
-    Tc: sp.csr_matrix
+    Nc: sp.csr_matrix | None
+    Tc: sp.csr_matrix | None
     F: Any = None
     ZF: Any = None
     static: Any = None
+    ET_static: Any = None
 
 
 class Discretization:
@@ -82,9 +95,13 @@ class Discretization:
                 f"[material] lam = {mat.lam:g}, eta = {mat.eta:g} give a stiffness matrix with "
                 "non-finite entries (an overflow); use values of a sensible scale"
             )
-        K = self.K_full[self.free][:, self.free].tocsr()
-        # the lifting of prescribed values, K_fc u_c(t) (none if all are zero)
-        self.K_fc = None if con.zero else self.K_full[self.free][:, con.dofs].tocsr()
+        K_rows = self.K_full[self.free]  # the rows of the free dofs, sliced once
+        K = K_rows[:, self.free].tocsr()
+        # the coupling of the free and the constrained dofs: the lifting of prescribed
+        # values, K_fc u_c(t) (none if all are zero), and the reactions
+        self._K_fc = K_rows[:, con.dofs].tocsr()
+        self.K_fc = None if con.zero else self._K_fc
+        del K_rows
         trace = None
         #: the dimension d: dof i of the vertex values is component i % d
         self.dim = dim = int(space.dim)
@@ -92,11 +109,14 @@ class Discretization:
             index = -np.ones(self.n_dof, dtype=np.int64)
             index[self.free] = np.arange(len(self.free))
             cdofs = index[dim * cb.nodes[:, None] + np.arange(dim)]
+            # whether the contact forces reach constrained components (the reactions)
+            self._contact_constrained = bool(np.any(cdofs < 0))
             self.offset = self._contact_offset(cdofs)
             dof_points = mesh.points[self.free // dim]
         else:  # the trace operator on the free dofs; prescribed dofs give the offset
             cdofs = None
             trace = sp.csr_matrix(cb.trace[:, self.free])
+            self._contact_constrained = True  # the operators of the reactions tell
             self.offset = self._contact_offset_trace()
             dof_points = space.dof_points[self.free]
         shift = self.gap - self.offset
@@ -120,7 +140,7 @@ class Discretization:
         self._F0: NDArray | None = None
         self._solvers: dict[Any, Any] = {}
         self._reaction: _Reactions | None = None
-        self._vt: tuple[float, NDArray[np.float64]] | None = None
+        self._sliding_at: _Sliding | None = None
         self._K_cc = sp.csr_matrix((0, 0))
         self._Fc0: NDArray | None = None
 
@@ -208,7 +228,8 @@ class Discretization:
 
     def tangential_velocity(self, t: float) -> NDArray[np.float64]:
         """``v*(t) . tau_a`` at every contact node (each part's own v*); the last time's
-        values are kept (step data and wear rate ask for the same t).
+        values are kept (step data and wear rate ask for the same t), and the first
+        ones for good when every v* is a constant vector.
 
         Values within round-off of zero are zero: a v* that vanishes at a level (the
         zeros of ``cos(2 pi t)`` evaluate to about 1e-16) gives no friction and no wear
@@ -216,12 +237,29 @@ class Discretization:
         Round-off is :data:`VELOCITY_ROUNDOFF` times the largest ``|v*|`` of the time
         grid.
         """
-        if self._vt is None or self._vt[0] != t:
+        return self._sliding(t).v
+
+    def _sliding(self, t: float) -> _Sliding:
+        """:meth:`tangential_velocity` with the friction coefficients and wear rate."""
+        s = self._sliding_at
+        if s is None or (s.t != t and not self._steady_velocity):
             cb = self.contact
             v = tangential_velocity(self.problem.parts, cb.part, cb.tangents, t)
             v[np.abs(v) <= self._velocity_roundoff] = 0.0
-            self._vt = (t, v)
-        return self._vt[1]
+            # n* . tau_a = -sign(v*_tau . tau_a): friction opposes the tangential
+            # sliding, and vanishes where the foundation does not slide along the boundary
+            s = _Sliding(t, v, self.mu * -np.sign(v), self.kappa * np.abs(v))
+            self._sliding_at = s
+        return s
+
+    @functools.cached_property
+    def _steady_velocity(self) -> bool:
+        """Whether every part's v* is a constant vector (neither a callable nor a table):
+        then v*_tau and what follows from it are the same at every time."""
+        return not any(
+            callable(pc.velocity.spec) or isinstance(pc.velocity.spec, Mapping)
+            for pc in self.problem.parts
+        )
 
     @functools.cached_property
     def _velocity_roundoff(self) -> float:
@@ -238,15 +276,12 @@ class Discretization:
     def step_data(self, level: int, w: NDArray[np.float64]) -> StepData:
         """The step problem of a level with the wear ``w`` (= w^n)."""
         t = float(self.problem.time.t[level])
-        # n* . tau_a = -sign(v*_tau . tau_a): friction opposes the tangential sliding,
-        # and vanishes where the foundation does not slide along the boundary
-        fric = self.mu * -np.sign(self.tangential_velocity(t))
         w_step = w if self.shift is None else w + self.shift
-        return StepData(F=self.load(t), w=w_step, fric=fric, t=t, level=level)
+        return StepData(F=self.load(t), w=w_step, fric=self._sliding(t).fric, t=t, level=level)
 
     def alpha(self, t: float) -> NDArray[np.float64]:
         """``alpha(t) = kappa |v*_tau(t)|`` at the contact nodes (2.2 for any Gamma_C)."""
-        return self.kappa * np.abs(self.tangential_velocity(t))
+        return self._sliding(t).alpha
 
     @property
     def force_parts(self) -> tuple[tuple[str, str], ...]:
@@ -281,11 +316,17 @@ class Discretization:
         op = self._reaction_operators(solver)
         if step.F is not op.F:  # Z^T F once per load vector (a constant load: once)
             op.F, op.ZF = step.F, op.Z.T @ step.F
-        r_c = op.Nc @ normal + op.Tc @ tangent  # contact forces on constrained components
         if op.static is None or not self._constant_load:
-            static = self._K_cc @ con.values(step.t) - self._F_ext_c(step.t)
-            op.static = static
-        reaction = op.ZF - op.ZN @ normal - op.ZT @ tangent + op.ET @ (op.static + r_c)
+            op.static = self._K_cc @ con.values(step.t) - self._F_ext_c(step.t)
+            op.ET_static = None
+        if op.Nc is not None and op.Tc is not None:  # contact forces on constrained dofs
+            constrained = op.ET @ (op.static + (op.Nc @ normal + op.Tc @ tangent))
+        else:  # none (no contact node on a constrained part): the same sum with the zero
+            # contact forces, once per static load
+            if op.ET_static is None:
+                op.ET_static = op.ET @ (op.static + np.zeros(len(op.static)))
+            constrained = op.ET_static
+        reaction = op.ZF - op.ZN @ normal - op.ZT @ tangent + constrained
         out[len(cb.part_names) :] = reaction.reshape(-1, self.dim)
         return out
 
@@ -300,8 +341,7 @@ class Discretization:
                 (np.ones(len(con.dofs)), (np.arange(len(con.dofs)), cols)),
                 shape=(len(con.dofs), d * len(con.parts)),
             )
-            Kfc = self.K_full[self.free][:, con.dofs].tocsr()
-            B = np.asarray((Kfc @ E).todense())
+            B = np.asarray((self._K_fc @ E).todense())
             factor = getattr(solver, "factor", None)
             if factor is not None:
                 Z = factor.solve(B)
@@ -311,13 +351,19 @@ class Discretization:
                 Z = spla.splu(s.K.tocsc()).solve(B)
             Z = np.asarray(Z).reshape(len(self.free), -1)
             self._K_cc = self.K_full[con.dofs][:, con.dofs].tocsr()
+            # the contact forces on constrained components (None: there are none)
+            Nc = Tc = None
+            if self._contact_constrained:
+                Nc, Tc = cb.N[:, con.dofs].T.tocsr(), cb.Tau[:, con.dofs].T.tocsr()
+                if Nc.nnz == 0 and Tc.nnz == 0:
+                    Nc = Tc = None
             self._reaction = _Reactions(
                 Z=Z,
                 ET=np.asarray(E.T.todense()),
                 ZN=np.asarray(s.N @ Z).T,
                 ZT=np.asarray(s.Tau @ Z).T,
-                Nc=cb.N[:, con.dofs].T.tocsr(),
-                Tc=cb.Tau[:, con.dofs].T.tocsr(),
+                Nc=Nc,
+                Tc=Tc,
             )
         return self._reaction
 
@@ -337,11 +383,15 @@ class Discretization:
         """The solution with its true normal displacement ``u_nu = y + offset`` and, with
         ``step`` and ``solver``, its force resultants (:meth:`resultants`)."""
         changes: dict[str, Any] = {}
-        if np.any(self.offset):
+        if self._offset_nonzero:
             changes["u_nu"] = solution.u_nu + self.offset
         if step is not None:
             changes["forces"] = self.resultants(step, solution, solver)
         return dataclasses.replace(solution, **changes) if changes else solution
+
+    @functools.cached_property
+    def _offset_nonzero(self) -> bool:
+        return bool(np.any(self.offset))
 
     def full_dofs(self, u_free: NDArray[np.float64], t: float | None = None) -> NDArray:
         """All dofs of the displacement: ``u_free`` on the free dofs, the prescribed
@@ -353,6 +403,16 @@ class Discretization:
                 raise ValueError("full_displacement: the time is needed for prescribed values")
             u[self.constraints.dofs] = self.constraints.values(t)
         return u
+
+    def full_dofs_block(self, X: NDArray[np.float64], times: list[float]) -> NDArray:
+        """:meth:`full_dofs` of the columns of ``X`` (n_free, k) at their ``times``, as
+        the rows of a (k, n_dofs) array: one pass for a block of levels."""
+        U = np.zeros((X.shape[1], self.n_dof))
+        U[:, self.free] = X.T
+        if not self.constraints.zero:
+            for j, t in enumerate(times):
+                U[j, self.constraints.dofs] = self.constraints.values(t)
+        return U
 
     def full_displacement(
         self, u_free: NDArray[np.float64], t: float | None = None

@@ -101,7 +101,7 @@ def run_levels(
 
     tgrid = problem.time.t
     L = len(tgrid)
-    _, slot = plan.slots()
+    slot = plan.slots()[1].tolist()  # Python ints: read at every level
     state = start if start is not None else LoopState(0, np.zeros(sysm.m))
     # (completed, w of the next level, warm start): replaced as one tuple, so that a
     # signal arriving between two statements never sees a half-updated state
@@ -111,40 +111,46 @@ def run_levels(
     pending: list[tuple[int, Any, StepData, StepSolution]] = [
         (p.level, p.w, d.step_data(p.level, p.w), p.solution) for p in state.pending
     ]
+    # the displacements of a block, read before the next block overwrites them
+    block = np.empty((sysm.n_free, 0), order="F")
 
     # sinks with a ``dofs`` method also get every dof of a higher-order space (k = 2:
     # the edge and cell means besides the vertex values), e.g. for the ParaView output
     put_dofs = getattr(sink, "dofs", None) if d.space.order > 1 else None
 
-    def give(n_: int, u_free: Any, t_: float, res: Any) -> None:
-        full = d.full_dofs(u_free, t_)
+    def give(n_: int, full: Any, res: Any) -> None:
         sink.displacement(n_, d.space.vertex_values(full), res)
         if put_dofs is not None:
             put_dofs(n_, full)
 
     def flush() -> None:
+        nonlocal block
         if not pending:
             return
         if not batch:  # a resumed run whose pending levels another solver left
             for n_, _, st, so in pending:
                 full_sol = step_solver.solve(st, so, recover=True)
                 res = np.array([full_sol.residuals[k] for k in RESIDUAL_NAMES])
-                give(n_, full_sol.u, st.t, res)
+                give(n_, d.full_dofs(full_sol.u, st.t), res)
             pending.clear()
             return
+        if block.shape[1] < len(pending):
+            block = np.empty((sysm.n_free, max(recover_block, len(pending))), order="F")
         X = step_solver.recover_many(
             [st for _, _, st, _ in pending],
             [so.p_rigid for *_, so in pending],
             [so.p_soft for *_, so in pending],
+            out=block[:, : len(pending)],
         )
         fulls = kkt_residuals_block(
             sysm, [st for _, _, st, _ in pending], X, [so.p_rigid for *_, so in pending]
         )
+        U = d.full_dofs_block(X, [st.t for _, _, st, _ in pending])
         for j, (n_, _, st, so) in enumerate(pending):
             full = fulls[j]
             check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)
             res = np.array([full[k] for k in RESIDUAL_NAMES])
-            give(n_, X[:, j], st.t, res)
+            give(n_, U[j], res)
         pending.clear()
 
     def current() -> LoopState:
@@ -160,12 +166,12 @@ def run_levels(
         for n in bar:
             _, w, guess = now
             step = d.step_data(n, w)
-            store_here = bool(slot[n] >= 0)
+            store_here = slot[n] >= 0
             sol = step_solver.solve(step, guess, recover=store_here and not batch)
             sink.level(n, w, d.physical(sol, step, step_solver))
             if store_here:
                 if sol.u is not None:
-                    give(n, sol.u, step.t, None)
+                    give(n, d.full_dofs(sol.u, step.t), None)
                 else:
                     pending.append((n, w, step, sol))
             if callback is not None:
@@ -174,7 +180,7 @@ def run_levels(
             if n + 1 < L:  # wear update (3.22), left rectangle rule
                 with np.errstate(all="ignore"):
                     w_next = w + (tgrid[n + 1] - tgrid[n]) * d.alpha(step.t) * sol.p_soft
-                if not np.all(np.isfinite(w_next)):
+                if not np.isfinite(w_next).all():
                     raise _wear_overflow(problem, n, w_next)
             now = (n + 1, w_next, sol)
             # blocks at fixed positions among the stored levels: a resumed run recovers

@@ -76,9 +76,9 @@ class _ReducedMatrix:
     def matches(self, active, dp, fric) -> bool:
         """Same active set, slopes and (where it matters) friction: O(m) comparisons."""
         return bool(
-            (active == self.active).all()
+            active.tobytes() == self.active.tobytes()  # booleans: bytes compare as values
             and (dp == self.dp).all()
-            and (self.fric is None or (fric == self.fric).all())
+            and (self.fric is None or fric is self.fric or (fric == self.fric).all())
         )
 
     def solve(self, rhs: NDArray) -> NDArray:
@@ -143,17 +143,16 @@ class CondensedNewton:
         self.A_norm = self.C_NN * w[None, :]
         self._T = self.C_NT * w[None, :]
         self._H = np.hstack([self.C_NN, self.C_NT])  # one product per iteration
-        self._x = np.zeros(2 * m)  # work arrays of the iteration
+        self._x = np.zeros(2 * m)  # work arrays of the iteration, and views of their halves
+        self._x_n, self._x_t = self._x[:m], self._x[m:]
         self._buf = np.zeros(2 * m)
+        self._zeros = np.zeros(m)  # read only
+        self._wf: tuple[NDArray | None, NDArray] = (None, w)  # (fric, weights * fric)
         self._inv_g_ref = 1.0 / max(float(np.abs(system.g).max()), _TINY)
         self._reduced: _ReducedMatrix | None = None
         self._F: NDArray | None = None
         self._d: NDArray | None = None
-        # N^T and Tau^T restricted to the contact dofs, for the right-hand sides of
-        # the recovery
-        self._contact_cols = np.unique(np.concatenate([system.N.indices, system.Tau.indices]))
-        self._NT = system.N[:, self._contact_cols].T.tocsr()
-        self._TT = system.Tau[:, self._contact_cols].T.tocsr()
+        self._rhs = np.empty((system.n_free, 0), order="F")  # work array of recover_many
         # large dense products and LU factorizations run with one BLAS pool
         self._threads = solver_threads if m >= 128 else contextlib.nullcontext
 
@@ -167,25 +166,37 @@ class CondensedNewton:
         return self._d  # type: ignore[return-value]
 
     def recover_many(
-        self, steps: list[StepData], p_rigids: list[NDArray], p_softs: list[NDArray]
+        self,
+        steps: list[StepData],
+        p_rigids: list[NDArray],
+        p_softs: list[NDArray],
+        out: NDArray | None = None,
     ) -> NDArray:
-        """Full displacements of several levels with one block solve, shape (nf, len(steps))."""
+        """Full displacements of several levels with one block solve, shape (nf, len(steps)).
+
+        ``out``, a Fortran-ordered (nf, len(steps)) array, receives them instead of a
+        new array: a caller that recovers block after block reuses its memory.
+        """
         s = self.system
         k = len(steps)
+        if len(p_rigids) != k or len(p_softs) != k:
+            raise ValueError("recover_many: one p_rigid and one p_soft per step")
         # the right-hand sides F - N^T W (p_soft + p_rigid) - Tau^T W fric p_soft, built
-        # in one Fortran-ordered block (the layout the solvers take, no copies)
-        P = np.empty((s.m, k))
-        Q = np.empty((s.m, k))
-        for j, (st, p_rigid, p_soft) in enumerate(zip(steps, p_rigids, p_softs, strict=True)):
-            P[:, j] = s.weights * (p_soft + p_rigid)
-            Q[:, j] = s.weights * st.fric * p_soft
-        rhs = np.empty((s.n_free, k), order="F")
+        # in one Fortran-ordered block (the layout the solvers take, no copies) of a work
+        # array kept from call to call (fresh memory of that size costs page faults)
+        P_soft = np.column_stack(p_softs)
+        w = s.weights[:, None]
+        P = w * (P_soft + np.column_stack(p_rigids))
+        Q = w * np.column_stack([st.fric for st in steps]) * P_soft
+        if self._rhs.shape[1] < k:
+            self._rhs = np.empty((s.n_free, k), order="F")
+        rhs = self._rhs[:, :k]
         for j, st in enumerate(steps):
             rhs[:, j] = st.F
         # N and Tau act on the contact dofs only: (2m, k) products, not (n, k) ones
-        dofs = self._contact_cols
-        rhs[dofs] -= self._NT @ P + self._TT @ Q
-        return self.factor.solve(rhs)
+        NT, TT = s.force_operators
+        rhs[s.contact_cols] -= NT @ P + TT @ Q
+        return self.factor.solve(rhs, out=out)
 
     def solve(
         self, step: StepData, guess: StepSolution | None = None, recover: bool = True
@@ -196,11 +207,10 @@ class CondensedNewton:
         :meth:`recover_many` computes it later for several levels at once.
         """
         with self._threads():
-            y, p_rigid, it, errors = self._iterate(step, guess)
+            y, p_rigid, p_soft, it, errors = self._iterate(step, guess)
         s = self.system
         res = dict(zip(RESIDUAL_NAMES, errors, strict=True))
         p_rigid = np.maximum(p_rigid, 0.0)
-        p_soft = s.p(y - step.w)
         u = None
         if recover:
             u = self.recover_many([step], [p_rigid], [p_soft])[:, 0]
@@ -212,8 +222,8 @@ class CondensedNewton:
         )
 
     def _iterate(self, step: StepData, guess: StepSolution | None):
-        """The Newton iterations; returns y, p_rigid, the iteration count and the three
-        condensed residuals of the last iterate.
+        """The Newton iterations; returns y, p_rigid, p_soft = p(y - w), the iteration
+        count and the three condensed residuals of the last iterate.
 
         Each iteration solves ``J11 dy + C_NN W dp_rigid = -R`` with ``dy = g - y`` on
         the active and ``dp_rigid = -p_rigid`` on the inactive set (the linearization of
@@ -227,8 +237,10 @@ class CondensedNewton:
             y, p_rigid = np.array(guess.u_nu, copy=True), np.array(guess.p_rigid, copy=True)
         else:
             y, p_rigid = np.minimum(d, g), np.zeros(s.m)
-        m, w, H, x, buf = s.m, s.weights, self._H, self._x, self._buf
-        wf = w * fric
+        w, H, x, x_n, x_t, buf = s.weights, self._H, self._x, self._x_n, self._x_t, self._buf
+        if self._wf[0] is not fric:  # the steps of a steady v* share one fric array
+            self._wf = (fric, w * fric)
+        wf = self._wf[1]
         inv_g = self._inv_g_ref
         stop = 0.1 * opt.tol
         it = 0
@@ -236,51 +248,63 @@ class CondensedNewton:
             r = y - wear
             p_soft = law(r)
             # R = y - d + C_NN W (p_soft + p_rigid) + C_NT W Fric p_soft
-            np.multiply(w, p_soft + p_rigid, out=x[:m])
-            np.multiply(wf, p_soft, out=x[m:])
+            np.multiply(w, p_soft + p_rigid, out=x_n)
+            np.multiply(wf, p_soft, out=x_t)
             R = H @ x
             R += y
             R -= d
             errors = _condensed_errors(y, p_rigid, R, g, inv_g, buf)
             if max(errors) <= stop or it == opt.max_iter:
-                return y, p_rigid, it, errors
+                return y, p_rigid, p_soft, it, errors
             it += 1
             active = p_rigid + c_ncp * (y - g) > 0.0
             dp = law.derivative(r)
             red = self._reduced
             if red is None or not red.matches(active, dp, fric):
                 red = self._reduced = _ReducedMatrix(self.A_norm, self._T, active, dp, fric)
-            dy_A = np.where(active, g - y, 0.0)
-            dp_I = np.where(active, 0.0, p_rigid)
+            # no active node (the body off the rigid layer, the usual case): the masks
+            # give dy_A = 0 and dp_I = p_rigid, without the array passes
+            any_active = np.count_nonzero(active) > 0
+            dy_A = np.where(active, g - y, 0.0) if any_active else self._zeros
+            dp_I = np.where(active, 0.0, p_rigid) if any_active else p_rigid
             rhs = -R
-            if dy_A.any() or dp_I.any():
+            if np.count_nonzero(dy_A) or np.count_nonzero(dp_I):
                 # rhs -= J11 dy_A + C_NN W (-p_rigid_I)
                 t = dp * dy_A
-                np.multiply(w, t - dp_I, out=x[:m])
-                np.multiply(wf, t, out=x[m:])
+                np.multiply(w, t - dp_I, out=x_n)
+                np.multiply(wf, t, out=x_t)
                 rhs -= dy_A
                 rhs -= H @ x
             sol = red.solve(rhs)
-            y = np.where(active, g, y + sol)
-            p_rigid = np.where(active, p_rigid + sol, 0.0)
+            if any_active:
+                y = np.where(active, g, y + sol)
+                p_rigid = np.where(active, p_rigid + sol, 0.0)
+            else:
+                y = y + sol
+                p_rigid = np.zeros(s.m)
 
 
 def _condensed_errors(y, p_rigid, R, g, inv_g, buf) -> tuple[float, float, float]:
-    """The three condensed residuals of :func:`condensed_residuals`, as a tuple.
+    """The three condensed residuals of :func:`condensed_residuals`, as a tuple
+    (``buf``: a work array of 2m entries).
 
-    The feasibility residual is never above the complementarity residual (where
-    ``y > g``, ``|min(p_rigid / p_ref, (g - y) / g_ref)| >= (y - g) / g_ref``), so the
-    largest of the three is the largest entry of ``buf = |[R / g_ref, ncp]|``; the
-    feasibility value is read from the same numbers.
+    ``inv_g = 1 / g_ref > 0``: scaling by it commutes with abs, min and max (rounding
+    is monotone), so ``max |R| inv_g`` is the largest of the scaled entries, bitwise.
+    Without rigid-layer pressure (``p_rigid = 0``, the usual case) the complementarity
+    function is ``min(0, (g - y) / g_ref)``, whose largest absolute value is the largest
+    violation ``-min (g - y) / g_ref`` of the bound (or 0): no array pass for it.
     """
     m = len(y)
-    p_ref = max(float(p_rigid.max()), -float(p_rigid.min())) or _TINY
-    np.multiply(R, inv_g, out=buf[:m])
-    gap = g - y
+    equilibrium = float(np.abs(R, out=buf[:m]).max()) * inv_g
+    if not np.count_nonzero(p_rigid):
+        low = -(float((g - y).min()) * inv_g)
+        # max(0.0, low) is 0 for a NaN low; the complementarity keeps the NaN
+        return equilibrium, max(0.0, low), 0.0 if low <= 0.0 else low
+    p_ref = float(np.abs(p_rigid).max()) or _TINY  # = max(max p_rigid, -min p_rigid)
+    gap = np.subtract(g, y, out=buf[:m])
     gap *= inv_g
-    np.minimum(p_rigid / p_ref, gap, out=buf[m:])
-    np.abs(buf, out=buf)
-    return float(buf[:m].max()), max(0.0, -float(gap.min())), float(buf[m:].max())
+    ncp = np.minimum(p_rigid / p_ref, gap, out=buf[m:])
+    return equilibrium, max(0.0, -float(gap.min())), float(np.abs(ncp, out=ncp).max())
 
 
 class FullNewton:

@@ -13,8 +13,11 @@ from ..mesh.polymesh import Mesh
 from .local import Material, element_matrices
 from .quadrature import GAUSS2, Field, cell_means, eval_field
 
-#: Cells per batch of local matrices in :func:`stiffness`.
-CHUNK = 4096
+#: Cells per batch of local matrices in :func:`stiffness`: the batch's temporaries (a
+#: few hundred kB for triangles) are reused from one batch to the next instead of being
+#: mapped afresh, whose page faults cost more than the arithmetic (64 x 32 triangles:
+#: 6.7 ms with 512, 9.4 ms with 4096; 256 x 128: 83 ms against 200 ms).
+CHUNK = 512
 
 
 def _dofs(verts: NDArray[np.int64]) -> NDArray[np.int64]:
@@ -47,8 +50,9 @@ def stiffness(mesh: Mesh, material: Material, stabilization: str = "paper") -> s
             K = element_matrices(mesh.points[v], material, stabilization)[0]
             vals[at : at + size] = K.ravel()
             d = _dofs(v).astype(index)
-            rows[at : at + size] = np.repeat(d, n2, axis=1).ravel()
-            cols[at : at + size] = np.tile(d, (1, n2)).ravel()
+            # entry (i, j) of a cell's matrix: row dof i, column dof j (broadcast in place)
+            rows[at : at + size].reshape(len(v), n2, n2)[...] = d[:, :, None]
+            cols[at : at + size].reshape(len(v), n2, n2)[...] = d[:, None, :]
             at += size
     A = sp.coo_matrix((vals, (rows, cols)), shape=(ndof, ndof)).tocsr()
     A.sum_duplicates()
@@ -63,8 +67,10 @@ def body_force_vector(mesh: Mesh, f1: Field, t: float = 0.0) -> NDArray[np.float
     fbar = cell_means(mesh, f1, t, "body force f1")
     share = (mesh.cell_areas / mesh.cell_sizes)[:, None] * fbar  # (n_cells, 2)
     per_vertex = np.repeat(share, mesh.cell_sizes, axis=0)
-    F = np.zeros((mesh.n_points, 2))
-    np.add.at(F, mesh.cell_vertices, per_vertex)
+    # bincount adds in the order of the vertex list, as np.add.at does, many times faster
+    F = np.empty((mesh.n_points, 2))
+    for c in range(2):
+        F[:, c] = np.bincount(mesh.cell_vertices, per_vertex[:, c], minlength=mesh.n_points)
     return F.ravel()
 
 

@@ -5,8 +5,9 @@ A *Schur factorization* factorizes an SPD matrix ``K`` once and gives
 * ``S_inv``: the block of ``K^{-1}`` on a set of dofs (the contact dofs), the inverse
   of the Schur complement ``S = K_cc - K_ci K_ii^{-1} K_ic`` that a partial
   factorization leaves, and
-* ``solve(b)``: ``K^{-1} b`` for a vector or an (n, k) block of right-hand sides, with
-  the same factorization (the recovery of the displacement).
+* ``solve(b, out=None)``: ``K^{-1} b`` for a vector or an (n, k) block of right-hand
+  sides, with the same factorization (the recovery of the displacement), written to
+  ``out`` when given (a Fortran-ordered array of b's shape, reused block after block).
 
 A *factorization* (any square matrix) gives ``solve(b)`` only.
 """
@@ -46,7 +47,9 @@ class SchurFactorization(Protocol):
     S_inv: NDArray[np.float64]
     timings: dict[str, float]
 
-    def solve(self, b: NDArray[np.float64]) -> NDArray[np.float64]: ...
+    def solve(
+        self, b: NDArray[np.float64], out: NDArray[np.float64] | None = None
+    ) -> NDArray[np.float64]: ...
 
 
 #: Columns per block of the in-place passes over a dense Schur block (bounds their

@@ -183,6 +183,26 @@ def _block(b: NDArray, n: int) -> tuple[NDArray, int]:
     return np.asfortranarray(b.reshape(n, k)), k
 
 
+def _upper(A: sp.csr_matrix) -> sp.csr_matrix:
+    """The upper triangle (with the diagonal) of a square CSR matrix, the entries of
+    ``sp.triu`` in the same order (sorted indices), without its round trip through COO."""
+    if not A.has_canonical_format:  # sorted indices, no repeated entries, as from COO
+        A = A.copy()
+        A.sum_duplicates()
+    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+    keep = A.indices >= rows
+    indptr = np.zeros(A.shape[0] + 1, dtype=A.indptr.dtype)
+    np.cumsum(np.bincount(rows[keep], minlength=A.shape[0]), out=indptr[1:])
+    return sp.csr_matrix((A.data[keep], A.indices[keep], indptr), shape=A.shape)
+
+
+def _output(out: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``out`` as the (n, k) Fortran-ordered block PARDISO writes (a view), checked."""
+    if out.shape != np.shape(b) or out.dtype != np.float64 or not out.flags.f_contiguous:
+        raise ValueError("solve: out must be a Fortran-ordered float64 array of b's shape")
+    return out.reshape(len(out), -1, order="F")
+
+
 class PardisoFactor:
     """PARDISO factorization of a square sparse matrix; SPD (Cholesky) when ``spd``."""
 
@@ -230,8 +250,7 @@ class PardisoSchur:
         c = len(last)
         if len(np.unique(last)) != c:
             raise ValueError("Schur dofs: the list of contact dofs has repeated entries")
-        U = sp.triu(sp.csr_matrix(K, dtype=np.float64), format="csr")
-        U.sort_indices()
+        U = _upper(sp.csr_matrix(K, dtype=np.float64))
         perm = np.zeros(n, dtype=np.int32)
         perm[last] = 1
         # parallel nested dissection (iparm[1] = 3) and the two-level factorization
@@ -265,12 +284,15 @@ class PardisoSchur:
             del S
             self.timings["schur"] = time.perf_counter() - tick
 
-    def solve(self, b: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``K^{-1} b`` for a vector or an (n, k) block of right-hand sides."""
+    def solve(
+        self, b: NDArray[np.float64], out: NDArray[np.float64] | None = None
+    ) -> NDArray[np.float64]:
+        """``K^{-1} b`` for a vector or an (n, k) block of right-hand sides, written to
+        ``out`` when given (an array of b's shape, Fortran-ordered)."""
         B, k = _block(b, self.n)
-        X = np.empty_like(B, order="F")  # PARDISO writes every entry
+        X = np.empty_like(B, order="F") if out is None else _output(out, b)
         with solver_threads():
-            self._h(33, B, X, k)
+            self._h(33, B, X, k)  # PARDISO writes every entry
         return X[:, 0] if np.ndim(b) == 1 else X
 
     def solve_partial(self, b: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -111,11 +111,16 @@ class SuperLUSchur:
         U22 = self.lu.U[:, n - c :][n - c :].toarray()
         return compliance_from_schur(U22.T @ (U22 / np.diag(U22)[:, None]))
 
-    def solve(self, b: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``K^{-1} b`` for a vector or an (n, k) block of right-hand sides."""
+    def solve(
+        self, b: NDArray[np.float64], out: NDArray[np.float64] | None = None
+    ) -> NDArray[np.float64]:
+        """``K^{-1} b`` for a vector or an (n, k) block of right-hand sides, written to
+        ``out`` when given (an array of b's shape)."""
         b = np.asarray(b, dtype=float)
         with solver_threads():
             xp = self.lu.solve(np.ascontiguousarray(b[self.perm]))
-        x = np.empty_like(xp)
+        x = np.empty_like(xp) if out is None else out
+        if x.shape != xp.shape:
+            raise ValueError("solve: out must have b's shape")
         x[self.perm] = xp
         return x
