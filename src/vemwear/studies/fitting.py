@@ -260,10 +260,11 @@ class _Model:
 
     def evaluate(self, thetas: Sequence[NDArray[np.float64]]) -> list[NDArray[np.float64]]:
         from ..post.results import load_result
+        from .dataset import run_arrays
         from .execute import RUNS_DIR, run_all
 
         specs = list({s.id: s for s in map(self.spec, thetas)}.values())
-        ex = run_all(specs, self.out, self.client, progress=False)
+        ex = run_all(specs, self.out, self.client, progress=False, extract=run_arrays)
         self.runs += ex.computed
         preds = {}
         for s in specs:
@@ -272,7 +273,8 @@ class _Model:
                 raise StudyError(
                     f"{self.src}: the run at {params_text(s.params)} failed: {rec['error']}"
                 )
-            res = load_result(self.out / RUNS_DIR / s.id)
+            # handed back by the task; read from the run's files if it ran earlier
+            res = ex.arrays.get(s.id) or load_result(self.out / RUNS_DIR / s.id)
             preds[s.id] = self.predict(res)
             self.last = res
         return [preds[self.spec(th).id] for th in thetas]
