@@ -7,6 +7,7 @@ vemwear.runner, netCDF files read back by xarray.
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import signal
@@ -174,6 +175,28 @@ def test_a_failing_run_is_retried_then_recorded_and_the_others_go_on(tmp_path: P
     rec = json.loads((out / "log" / f"{rid}.json").read_text())
     assert rec["status"] == "failed" and "did not converge" in rec["error"]
     assert not (out / "runs" / rid / "result.npz").exists()
+
+
+def test_workers_report_each_run_of_a_chunk_as_it_finishes(tmp_path: Path) -> None:
+    """Four runs in one task: the worker publishes each finished run (the progress bar's
+    events), one after the other, before the task ends."""
+    from vemwear.studies import load_study
+    from vemwear.studies.dataset import run_arrays
+    from vemwear.studies.execute import PROGRESS_TOPIC, open_study_dir, run_all, study_client
+
+    st = load_study(_study(tmp_path, '[axes]\n"contact.kappa" = [1.0, 2.0, 3.0, 4.0]\n'))
+    out = open_study_dir(tmp_path / "out", "sweep")
+    events: list[tuple[float, str]] = []
+    with study_client(workers=1) as client:
+        client.subscribe_topic(PROGRESS_TOPIC, events.append)
+        ex = run_all(st.runs, out, client, progress=False, chunk=4, extract=run_arrays)
+        deadline = time.monotonic() + 10
+        while len(events) < 4 and time.monotonic() < deadline:
+            time.sleep(0.05)
+    assert ex.computed == 4 and set(ex.arrays) == {r.id for r in st.runs}
+    assert [rid for _, rid in events] == [r.id for r in st.runs]
+    stamps = [t for t, _ in events]
+    assert all(b > a for a, b in itertools.pairwise(stamps)), stamps
 
 
 # ---------------------------------------------------------------------------- dask scheduler

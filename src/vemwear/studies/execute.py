@@ -33,6 +33,7 @@ import logging
 import os
 import socket
 import sys
+import threading
 import time
 import weakref
 from collections.abc import Callable, Iterator, Sequence
@@ -47,6 +48,7 @@ from .design import RunSpec, StudyError, params_text
 __all__ = [
     "CONFIGS_DIR",
     "LOG_DIR",
+    "PROGRESS_TOPIC",
     "RUNS_DIR",
     "Execution",
     "RunFailed",
@@ -394,7 +396,22 @@ def run_chunk(
                     rec = _failed(rid, params, str(exc))
                     _write_record(Path(outdir), rec)
         records.append(rec)
+        _tell_progress(rid)
     return records
+
+
+#: The Dask event topic of finished runs (the client's progress bar counts them).
+PROGRESS_TOPIC = "vemwear-run-finished"
+
+
+def _tell_progress(rid: str) -> None:
+    """Publish that run ``rid`` finished, when running on a Dask worker."""
+    try:
+        from distributed import get_worker
+
+        get_worker().log_event(PROGRESS_TOPIC, rid)
+    except (ImportError, ValueError):  # not on a worker: nobody to tell
+        pass
 
 
 def chunk_size(n_runs: int, n_threads: int) -> int:
@@ -478,6 +495,20 @@ def run_all(
         disable=not progress,
         file=sys.stderr,
     )
+    # the bar advances per run, as the workers report them, not per chunk
+    counted: set[str] = set()
+    lock = threading.Lock()
+    ours = {r.id for r in todo}
+
+    def advance(rids: Sequence[str]) -> None:
+        with lock:
+            new = [rid for rid in rids if rid in ours and rid not in counted]
+            counted.update(new)
+            if new:
+                bar.update(len(new))
+
+    if progress and todo:
+        client.subscribe_topic(PROGRESS_TOPIC, lambda event: advance([event[1]]))
     futures = {}
     for i in range(0, len(todo), chunk):
         part = todo[i : i + chunk]
@@ -522,11 +553,13 @@ def run_all(
                     ex.skipped += not rec.get("executed")
                 ex.records[r.id] = rec
             fut.release()
-            bar.update(len(part))
+            advance([r.id for r in part])
     except BaseException:
         client.cancel(list(futures))
         raise
     finally:
+        if progress and todo:
+            client.unsubscribe_topic(PROGRESS_TOPIC)
         bar.close()
     ex.seconds = time.perf_counter() - t0
     return ex
