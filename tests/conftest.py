@@ -164,3 +164,41 @@ def moments(X):
             np.sum(c * (y * y + y * yn + yn * yn)) / 12,
         ]
     )
+
+
+# ----------------------------------------------------------------------------- polygons
+def is_convex(X):
+    """Whether the counter-clockwise polygon X turns left at every vertex."""
+    d = np.roll(X, -1, axis=0) - X
+    e = np.roll(d, -1, axis=0)
+    return np.all(d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0] > 0)
+
+
+def angles(rng, n):
+    """Sorted angles in [0, 2 pi) with no gap smaller than a third of the mean gap."""
+    while True:
+        th = np.sort(rng.uniform(0, 2 * np.pi, n))
+        gaps = np.diff(np.r_[th, th[0] + 2 * np.pi])
+        if gaps.min() > (2 * np.pi / n) / 3 and gaps.max() < 0.9 * np.pi:
+            return th
+
+
+def place(rng, P):
+    """Random rotation, scale over three decades and translation."""
+    a = rng.uniform(0, 2 * np.pi)
+    R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    return P @ R.T * 10 ** rng.uniform(-2, 1) + rng.uniform(-5, 5, 2)
+
+
+def polygon(rng, n, kind):
+    """A random convex (on an ellipse) or star-shaped non-convex polygon of n vertices,
+    counter-clockwise, placed at random."""
+    while True:
+        th = angles(rng, n)
+        if kind == "convex":
+            ab = rng.uniform(0.4, 1.0, 2)
+            return place(rng, np.column_stack([ab[0] * np.cos(th), ab[1] * np.sin(th)]))
+        r = rng.uniform(0.35, 1.0, n)
+        X = np.column_stack([r * np.cos(th), r * np.sin(th)])
+        if not is_convex(X):
+            return place(rng, X)

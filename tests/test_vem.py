@@ -13,7 +13,7 @@ import pytest
 import scipy.sparse.linalg as spla
 from scipy.spatial import Voronoi
 
-from conftest import moments
+from conftest import is_convex, moments, polygon
 from vemwear.mesh import Mesh, check_mesh, tag_rectangle
 from vemwear.vem import (
     STABILIZATIONS,
@@ -64,44 +64,6 @@ def cross2(a, b):
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
-def is_convex(X):
-    d = np.roll(X, -1, axis=0) - X
-    return np.all(cross2(d, np.roll(d, -1, axis=0)) > 0)
-
-
-def angles(rng, n):
-    """Sorted angles in [0, 2 pi) with no gap smaller than a third of the mean gap."""
-    while True:
-        th = np.sort(rng.uniform(0, 2 * np.pi, n))
-        gaps = np.diff(np.r_[th, th[0] + 2 * np.pi])
-        if gaps.min() > (2 * np.pi / n) / 3 and gaps.max() < 0.9 * np.pi:
-            return th
-
-
-def place(rng, P):
-    """Random rotation, scale over three decades and translation."""
-    a = rng.uniform(0, 2 * np.pi)
-    R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
-    return P @ R.T * 10 ** rng.uniform(-2, 1) + rng.uniform(-5, 5, 2)
-
-
-def convex_polygon(rng, n):
-    """n points in convex position on a random ellipse, counter-clockwise."""
-    th = angles(rng, n)
-    ab = rng.uniform(0.4, 1.0, 2)
-    return place(rng, np.column_stack([ab[0] * np.cos(th), ab[1] * np.sin(th)]))
-
-
-def star_polygon(rng, n):
-    """Star-shaped (w.r.t. a disk around the origin), not convex, counter-clockwise."""
-    while True:
-        th = angles(rng, n)
-        r = rng.uniform(0.35, 1.0, n)
-        X = np.column_stack([r * np.cos(th), r * np.sin(th)])
-        if not is_convex(X):
-            return place(rng, X)
-
-
 def rigid_modes(X):
     """Vertex values of the translations and the infinitesimal rotation, (3, 2n)."""
     n = len(X)
@@ -115,8 +77,7 @@ def rigid_modes(X):
 
 
 def random_polygons(kind, n, count, rng):
-    make = convex_polygon if kind == "convex" else star_polygon
-    return np.stack([make(rng, n) for _ in range(count)])
+    return np.stack([polygon(rng, n, kind) for _ in range(count)])
 
 
 # ----------------------------------------------------------------------------- meshes
@@ -344,7 +305,7 @@ def test_element_stiffness_frame_invariance_and_batching(stab):
     """K is invariant under translation and scaling (2D), rotates as R K R^T, follows a
     cyclic relabelling of the vertices, and a batch equals cell-by-cell evaluation."""
     rng = np.random.default_rng(7)
-    X = np.stack([star_polygon(rng, 7) for _ in range(4)])
+    X = np.stack([polygon(rng, 7, "star") for _ in range(4)])
     K = element_matrices(X, MAT, stab)[0]
     a = 0.7
     R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])

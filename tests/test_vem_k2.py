@@ -12,7 +12,7 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from conftest import moments
+from conftest import moments, polygon
 from vemwear.mesh import tag_rectangle
 from vemwear.mesh.registry import FAMILIES
 from vemwear.vem import STABILIZATIONS, Material
@@ -40,40 +40,6 @@ MAT = Material(lam=7.5, eta=1.3)  # lam != eta catches a swapped Lamé pair
 
 
 # ----------------------------------------------------------------------------- polygons
-def angles(rng, n):
-    while True:
-        th = np.sort(rng.uniform(0, 2 * np.pi, n))
-        gaps = np.diff(np.r_[th, th[0] + 2 * np.pi])
-        if gaps.min() > (2 * np.pi / n) / 3 and gaps.max() < 0.9 * np.pi:
-            return th
-
-
-def place(rng, P):
-    """Random rotation, scale over three decades and translation."""
-    a = rng.uniform(0, 2 * np.pi)
-    R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
-    return P @ R.T * 10 ** rng.uniform(-2, 1) + rng.uniform(-5, 5, 2)
-
-
-def is_convex(X):
-    d = np.roll(X, -1, axis=0) - X
-    e = np.roll(d, -1, axis=0)
-    return np.all(d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0] > 0)
-
-
-def polygon(rng, n, kind):
-    """A random convex (on an ellipse) or star-shaped non-convex polygon, counter-clockwise."""
-    while True:
-        th = angles(rng, n)
-        if kind == "convex":
-            ab = rng.uniform(0.4, 1.0, 2)
-            return place(rng, np.column_stack([ab[0] * np.cos(th), ab[1] * np.sin(th)]))
-        r = rng.uniform(0.35, 1.0, n)
-        X = np.column_stack([r * np.cos(th), r * np.sin(th)])
-        if not is_convex(X):
-            return place(rng, X)
-
-
 def batch(rng, n, kind, count=6):
     return np.stack([polygon(rng, n, kind) for _ in range(count)])
 

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from ..mesh.locate import vertex_averages
 from ..vem.dofs2 import edge_ids, numbering2, project2
 from ..vem.local import strain_stress
+from .pointdata import contact_point_data
 
 if TYPE_CHECKING:
     from ..mesh.polymesh import Mesh
@@ -102,19 +103,7 @@ def refined_level_fields(
     disp[:, :2] = u
     point_data: dict[str, NDArray[np.float64]] = {"displacement": disp}
     nodes = np.asarray(result.contact_nodes, dtype=np.int64)  # midpoints: n_p + e, as here
-    for key, arr in (
-        ("wear", result.wear),
-        ("u_nu", result.u_nu),
-        ("penetration", result.penetration),
-        ("lam", result.p_rigid),
-        ("p", result.p_soft),
-    ):
-        full = np.zeros(len(u))
-        full[nodes] = np.asarray(arr[lv])
-        point_data[key] = full
-    contact = np.zeros(len(u))
-    contact[nodes] = 1.0
-    point_data["contact"] = contact
+    point_data.update(contact_point_data(result, lv, len(u), nodes))
     centroids = rm.points[rm.triangles].mean(axis=1)
     _, grad = pi.at(centroids, rm.parent)
     strain, stress, vm = strain_stress(

@@ -40,6 +40,7 @@ from ..mesh.polymesh import Mesh
 from ..util.atomic import write_atomic
 from ..vem.local import Material, strain_stress
 from ..vem.projection import Projection
+from .pointdata import contact_point_data
 
 if TYPE_CHECKING:
     from ..simulate.loop import Result
@@ -113,33 +114,6 @@ def level_fields(
     strain, stress, vm = cell_strain_stress(mesh, u, result.problem.material, proj)
     cells = {"strain": strain.reshape(-1, 9), "stress": stress.reshape(-1, 9), "von_mises": vm}
     return point_data, cells
-
-
-def contact_point_data(
-    result: Result,
-    level: int,
-    n: int,
-    nodes: NDArray[np.int64],
-    keep: NDArray[np.bool_] | slice = slice(None),
-) -> dict[str, NDArray[np.float64]]:
-    """The contact arrays of a stored level as point data of ``n`` vertices (0 off
-    Gamma_C), and the indicator ``contact``; ``keep`` selects the contact nodes that are
-    the vertices ``nodes`` (k = 2: not the edge midpoints)."""
-    out: dict[str, NDArray[np.float64]] = {}
-    for key, arr in (
-        ("wear", result.wear),
-        ("u_nu", result.u_nu),
-        ("penetration", result.penetration),
-        ("lam", result.p_rigid),
-        ("p", result.p_soft),
-    ):
-        full = np.zeros(n)
-        full[nodes] = np.asarray(arr[level])[keep]
-        out[key] = full
-    contact = np.zeros(n)
-    contact[nodes] = 1.0
-    out["contact"] = contact
-    return out
 
 
 def _pvd_text(entries: list[tuple[float, str]]) -> str:

@@ -24,7 +24,8 @@ from numpy.typing import NDArray
 from ..mesh.io3d import write_mesh3d
 from ..util.atomic import atomic_file
 from ..vem.local import strain_stress
-from .vtk import contact_point_data, write_series
+from .pointdata import contact_point_data
+from .vtk import write_series
 
 if TYPE_CHECKING:
     from ..simulate.loop import Result
