@@ -96,6 +96,11 @@ class FoundationVelocity:
             raise ValueError(f"v_star({t:g}) must be a finite 2- or 3-vector, got {v!r}")
         return v
 
+    @property
+    def steady(self) -> bool:
+        """Whether v* is one constant vector (neither a function of t nor a table)."""
+        return not (callable(self.spec) or isinstance(self.spec, Mapping))
+
     def n_star(self, t: float) -> NDArray[np.float64]:
         """``-v*/|v*|``, or zero where the foundation stands still."""
         v = self(t)

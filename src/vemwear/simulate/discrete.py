@@ -13,7 +13,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import warnings
-from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -109,14 +108,11 @@ class Discretization:
             index = -np.ones(self.n_dof, dtype=np.int64)
             index[self.free] = np.arange(len(self.free))
             cdofs = index[dim * cb.nodes[:, None] + np.arange(dim)]
-            # whether the contact forces reach constrained components (the reactions)
-            self._contact_constrained = bool(np.any(cdofs < 0))
             self.offset = self._contact_offset(cdofs)
             dof_points = mesh.points[self.free // dim]
         else:  # the trace operator on the free dofs; prescribed dofs give the offset
             cdofs = None
             trace = sp.csr_matrix(cb.trace[:, self.free])
-            self._contact_constrained = True  # the operators of the reactions tell
             self.offset = self._contact_offset_trace()
             dof_points = space.dof_points[self.free]
         shift = self.gap - self.offset
@@ -254,12 +250,9 @@ class Discretization:
 
     @functools.cached_property
     def _steady_velocity(self) -> bool:
-        """Whether every part's v* is a constant vector (neither a callable nor a table):
-        then v*_tau and what follows from it are the same at every time."""
-        return not any(
-            callable(pc.velocity.spec) or isinstance(pc.velocity.spec, Mapping)
-            for pc in self.problem.parts
-        )
+        """Whether every part's v* is a constant vector: then v*_tau and what follows
+        from it are the same at every time."""
+        return all(pc.velocity.steady for pc in self.problem.parts)
 
     @functools.cached_property
     def _velocity_roundoff(self) -> float:
@@ -321,10 +314,9 @@ class Discretization:
             op.ET_static = None
         if op.Nc is not None and op.Tc is not None:  # contact forces on constrained dofs
             constrained = op.ET @ (op.static + (op.Nc @ normal + op.Tc @ tangent))
-        else:  # none (no contact node on a constrained part): the same sum with the zero
-            # contact forces, once per static load
+        else:  # none (no contact node on a constrained part): once per static load
             if op.ET_static is None:
-                op.ET_static = op.ET @ (op.static + np.zeros(len(op.static)))
+                op.ET_static = op.ET @ op.static
             constrained = op.ET_static
         reaction = op.ZF - op.ZN @ normal - op.ZT @ tangent + constrained
         out[len(cb.part_names) :] = reaction.reshape(-1, self.dim)
@@ -352,11 +344,9 @@ class Discretization:
             Z = np.asarray(Z).reshape(len(self.free), -1)
             self._K_cc = self.K_full[con.dofs][:, con.dofs].tocsr()
             # the contact forces on constrained components (None: there are none)
-            Nc = Tc = None
-            if self._contact_constrained:
-                Nc, Tc = cb.N[:, con.dofs].T.tocsr(), cb.Tau[:, con.dofs].T.tocsr()
-                if Nc.nnz == 0 and Tc.nnz == 0:
-                    Nc = Tc = None
+            Nc, Tc = cb.N[:, con.dofs].T.tocsr(), cb.Tau[:, con.dofs].T.tocsr()
+            if Nc.nnz == 0 and Tc.nnz == 0:
+                Nc = Tc = None
             self._reaction = _Reactions(
                 Z=Z,
                 ET=np.asarray(E.T.todense()),

@@ -179,15 +179,11 @@ class StepSolution:
 def _residuals(
     system: ContactSystem, y: NDArray, p_rigid: NDArray, equilibrium: float, p_ref: float
 ) -> dict[str, float]:
-    """The three residuals, given the scaled equilibrium residual and the pressure scale."""
-    g_ref = max(float(np.abs(system.g).max()), _TINY)
-    ncp = np.minimum(p_rigid / p_ref, (system.g - y) / g_ref)
-    values = (
-        float(equilibrium),
-        float(max(0.0, (y - system.g).max(initial=0)) / g_ref),
-        float(np.abs(ncp).max(initial=0)),
-    )
-    return dict(zip(RESIDUAL_NAMES, values, strict=True))
+    """The three residuals, given the scaled equilibrium residual and the pressure scale
+    (:func:`_residuals_block` of one column)."""
+    return _residuals_block(
+        system, y[:, None], p_rigid[:, None], np.array([equilibrium]), np.array([p_ref])
+    )[0]
 
 
 def kkt_residuals(

@@ -263,6 +263,20 @@ def read_record(out: Path, rid: str) -> dict[str, Any] | None:
     return rec if isinstance(rec, dict) else None
 
 
+def _complete_record(out: Path, rid: str, params: dict[str, Any], executed: bool) -> dict:
+    """The record of a run whose directory holds a complete result (its wall time from
+    the logged record, if that is there)."""
+    old = read_record(out, rid) or {}
+    return {
+        "id": rid,
+        "params": params,
+        "status": "done",
+        "error": "",
+        "wall_time": old.get("wall_time", float("nan")),
+        "executed": executed,
+    }
+
+
 def _write_record(out: Path, rec: dict[str, Any]) -> None:
     write_atomic(out / LOG_DIR / f"{rec['id']}.json", json.dumps(rec, indent=2) + "\n")
 
@@ -341,8 +355,7 @@ def run_task(
     }
     _wait_unlocked(rundir)
     if is_complete(rundir):
-        old = read_record(out, rid) or {}
-        return {**rec, "wall_time": old.get("wall_time", float("nan")), "executed": False}
+        return _complete_record(out, rid, params, executed=False)
     try:
         if not config_path.is_file() or config_path.read_text(encoding="utf-8") != config_text:
             write_atomic(config_path, config_text)
@@ -472,15 +485,7 @@ def run_all(
     todo = []
     for r in runs:
         if is_complete(out / RUNS_DIR / r.id):
-            old = read_record(out, r.id) or {}
-            ex.records[r.id] = {
-                "id": r.id,
-                "params": r.params,
-                "status": "done",
-                "error": "",
-                "wall_time": old.get("wall_time", float("nan")),
-                "executed": False,
-            }
+            ex.records[r.id] = _complete_record(out, r.id, r.params, executed=False)
             ex.skipped += 1
         else:
             todo.append(r)
@@ -535,7 +540,7 @@ def run_all(
                 recs = []
                 for r in part:
                     if is_complete(out / RUNS_DIR / r.id):
-                        recs.append({**(read_record(out, r.id) or {}), "executed": True})
+                        recs.append(_complete_record(out, r.id, r.params, executed=True))
                     else:
                         recs.append(_failed(r.id, r.params, msg))
                         _write_record(out, recs[-1])
