@@ -26,6 +26,7 @@ from vemwear.vem import (
     project,
     stiffness,
     traction_vector,
+    triangle_matrices,
 )
 
 MAT = Material(lam=4.0, eta=4.0)
@@ -326,6 +327,25 @@ def test_unknown_stabilization_rejected():
     X = np.array([[[0, 0], [1, 0], [0, 1]]], float)
     with pytest.raises(ValueError, match="stabilization"):
         element_matrices(X, MAT, "bogus")
+    mesh = tag_rectangle(Mesh.from_cells(X[0], [[0, 1, 2]]))
+    with pytest.raises(ValueError, match="stabilization"):
+        stiffness(mesh, MAT, "bogus")
+
+
+@pytest.mark.parametrize("stab", STABILIZATIONS)
+def test_triangle_matrices_are_the_general_path_without_stabilization(stab):
+    """On triangles Pi is the identity on P1: the general path's stabilization is
+    round-off, and triangle_matrices gives its matrices, for every weight."""
+    rng = np.random.default_rng(11)
+    X = np.stack([polygon(rng, 3, "convex") for _ in range(50)])
+    X *= rng.uniform(1e-3, 1e3, size=(50, 1, 1))  # scale-free: relative tolerances
+    for mat in (MAT, MAT_B):
+        K = element_matrices(X, mat, stab)[0]
+        T = triangle_matrices(X, mat)
+        scale = np.abs(K).max(axis=(1, 2))[:, None, None]
+        assert (np.abs(T - K) <= 1e-13 * scale).all()
+        ev = np.linalg.eigvalsh(T)
+        assert (np.abs(ev[:, :3]) <= 1e-12 * ev[:, -1:]).all()  # rigid motions
 
 
 # ----------------------------------------------------------------------------- 2. projection

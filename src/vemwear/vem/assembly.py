@@ -10,7 +10,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..mesh.polymesh import Mesh
-from .local import Material, element_matrices
+from .local import STABILIZATIONS, Material, element_matrices, triangle_matrices
 from .quadrature import GAUSS2, Field, cell_means, eval_field
 
 #: Cells per batch of local matrices in :func:`stiffness`: the batch's temporaries (a
@@ -31,11 +31,17 @@ def _dofs(verts: NDArray[np.int64]) -> NDArray[np.int64]:
 def stiffness(mesh: Mesh, material: Material, stabilization: str = "paper") -> sp.csr_matrix:
     """Assemble the VEM stiffness matrix of ``a_h`` on all ``2 * n_points`` dofs.
 
+    Triangles take :func:`~vemwear.vem.local.triangle_matrices` (P1, where the
+    stabilization vanishes), other cells :func:`~vemwear.vem.local.element_matrices`.
     Local matrices are built group by group (cells of equal vertex count), in chunks of
     :data:`CHUNK` cells so that the batched temporaries stay small and are reused
     (fresh arrays of hundreds of MB cost more in page faults than the arithmetic), and
     scattered once into a COO matrix.
     """
+    if stabilization not in STABILIZATIONS:
+        raise ValueError(
+            f"unknown stabilization {stabilization!r}; expected one of {', '.join(STABILIZATIONS)}"
+        )
     ndof = 2 * mesh.n_points
     index = np.int32 if ndof < 2**31 - 1 else np.int64  # less memory traffic in the scatter
     total = sum(len(verts) * (2 * n) ** 2 for n, (_ids, verts) in mesh.groups.items())
@@ -47,8 +53,11 @@ def stiffness(mesh: Mesh, material: Material, stabilization: str = "paper") -> s
         for a in range(0, len(verts), CHUNK):
             v = verts[a : a + CHUNK]
             size = len(v) * n2 * n2
-            K = element_matrices(mesh.points[v], material, stabilization)[0]
-            vals[at : at + size] = K.ravel()
+            block = vals[at : at + size].reshape(len(v), n2, n2)
+            if n == 3:  # P1: no stabilization (triangle_matrices), written in place
+                triangle_matrices(mesh.points[v], material, out=block)
+            else:
+                block[...] = element_matrices(mesh.points[v], material, stabilization)[0]
             d = _dofs(v).astype(index)
             # entry (i, j) of a cell's matrix: row dof i, column dof j (broadcast in place)
             rows[at : at + size].reshape(len(v), n2, n2)[...] = d[:, :, None]

@@ -75,17 +75,21 @@ def strain_stress(
     return strain, stress, vm
 
 
-def _interleave(xx, xy, yx, yy):
-    """Assemble (m, 2n, 2n) from four (m, n, n) blocks: [2j + a, 2i + c] = block_ac[j, i]."""
+def _interleave(xx, xy, yx, yy, out=None):
+    """Assemble (m, 2n, 2n) from four (m, n, n) blocks: [2j + a, 2i + c] = block_ac[j, i]
+    (into ``out`` when given)."""
     m, n, _ = xx.shape
-    out = np.empty((m, 2 * n, 2 * n))
+    out = np.empty((m, 2 * n, 2 * n)) if out is None else out
     out[:, 0::2, 0::2], out[:, 0::2, 1::2] = xx, xy
     out[:, 1::2, 0::2], out[:, 1::2, 1::2] = yx, yy
     return out
 
 
-def consistency_matrix(area: NDArray, q: NDArray, material: Material) -> NDArray[np.float64]:
-    """``|K| B^T D B``: the term ``a^K(Pi u, Pi v)`` of (3.11), from outer products of q."""
+def consistency_matrix(
+    area: NDArray, q: NDArray, material: Material, out: NDArray | None = None
+) -> NDArray[np.float64]:
+    """``|K| B^T D B``: the term ``a^K(Pi u, Pi v)`` of (3.11), from outer products of
+    ``q = |K| grad`` (written to ``out``, shape (m, 2n, 2n), when given)."""
     lam, eta = material.lam, material.eta
     qx, qy = q[..., 0], q[..., 1]
     sx, sy = qx / area[:, None], qy / area[:, None]  # 1/|K| once, not per entry
@@ -97,7 +101,30 @@ def consistency_matrix(area: NDArray, q: NDArray, material: Material) -> NDArray
         lam * XY + eta * YX,
         lam * YX + eta * XY,
         (lam + 2 * eta) * YY + eta * XX,
+        out,
     )
+
+
+def triangle_matrices(
+    X: NDArray[np.float64], material: Material, out: NDArray | None = None
+) -> NDArray[np.float64]:
+    """Local stiffness matrices ``a_h^K`` (3.11) of a batch of triangles, shape (m, 6, 6)
+    (written to ``out`` when given).
+
+    On a triangle the lowest-order virtual element space is P1 and ``Pi`` is the
+    identity on it, so ``I - Pi = 0`` and the stabilization of (3.11) vanishes for
+    every weight: ``a_h^K = |K| B^T D B`` with the P1 strain operator. The boundary
+    integrals ``q_i = |K| grad phi_i = (y_{i+1} - y_{i+2}, x_{i+2} - x_{i+1}) / 2``
+    give it directly, without the projection matrices of :func:`element_matrices`
+    (which computes the stabilization as round-off, 1e-31 relative, 8 times slower).
+    """
+    x, y = X[..., 0], X[..., 1]
+    nxt, prv = [1, 2, 0], [2, 0, 1]
+    q = np.empty(X.shape)
+    q[..., 0] = 0.5 * (y[:, nxt] - y[:, prv])
+    q[..., 1] = 0.5 * (x[:, prv] - x[:, nxt])
+    area = np.einsum("mi,mi->m", x, q[..., 0])
+    return consistency_matrix(area, q, material, out)
 
 
 def element_matrices(
