@@ -21,18 +21,42 @@ from tqdm.auto import tqdm
 
 from ..solvers import StepSolution
 from ..solvers.system import ConvergenceError, StepData, check_converged, kkt_residuals_block
+from ..solvers.threads import solver_threads
 from .stream import LevelSink, LoopState, Pending, StoragePlan
 
 if TYPE_CHECKING:
     from .options import SolverOptions
     from .problem import Problem
 
-__all__ = ["RESIDUAL_NAMES", "WearOverflowError", "run_levels"]
+__all__ = [
+    "RECOVER_ENTRIES",
+    "RESIDUAL_NAMES",
+    "WearOverflowError",
+    "recover_block_size",
+    "run_levels",
+]
 
 #: The KKT residuals of every step, in the order of the result arrays.
 RESIDUAL_NAMES = ("equilibrium", "feasibility", "complementarity")
 
+#: Entries of one block of recovered displacements (2^20 doubles, 8 MB): small problems
+#: recover all their stored levels in one block solve, large ones 32 levels at a time.
+RECOVER_ENTRIES = 2**20
 
+
+def recover_block_size(n_free: int, n_stored: int) -> int:
+    """Stored levels whose displacements one block solve recovers: as many as fit in
+    :data:`RECOVER_ENTRIES` (all of them for small problems), at least 32. One call
+    instead of several saves the solver's fixed cost per call (PARDISO: 0.1-0.2 ms at
+    1k unknowns, as much as a dozen more columns)."""
+    return max(32, min(n_stored, RECOVER_ENTRIES // max(n_free, 1)))
+
+
+# OpenBLAS's pools stay at one thread for the whole run, not only around the solver's
+# kernels: a pool woken by any NumPy product spins against MKL's threads (PARDISO) on
+# a small machine. A whole run at 16k unknowns took 0.056-0.060 s median without, 0.040 s
+# with (benchmarks/bench_threads.py).
+@solver_threads()
 def run_levels(
     problem: Problem,
     opts: SolverOptions,
@@ -41,7 +65,7 @@ def run_levels(
     *,
     start: LoopState | None = None,
     progress: bool = False,
-    recover_block: int = 32,
+    recover_block: int | None = None,
     checkpoint: float = 0.0,
     callback: Callable[[int, StepSolution], None] | None = None,
     timings: dict[str, float] | None = None,
@@ -62,10 +86,11 @@ def run_levels(
         Go on from this state (a checkpoint) instead of level 0.
     progress : bool
         Show a progress bar.
-    recover_block : int
+    recover_block : int, optional
         The condensed solver recovers displacements in blocks of this many stored
         levels, at fixed positions among them, so that a resumed run recovers the same
-        blocks (and gets bitwise the same numbers).
+        blocks (and gets bitwise the same numbers). Default:
+        :func:`recover_block_size` of the problem and the plan.
     checkpoint : float
         Seconds between calls of ``sink.checkpoint`` (0: never during the loop).
     callback : callable, optional
@@ -102,6 +127,8 @@ def run_levels(
     tgrid = problem.time.t
     L = len(tgrid)
     slot = plan.slots()[1].tolist()  # Python ints: read at every level
+    if recover_block is None:
+        recover_block = recover_block_size(sysm.n_free, len(plan.u_levels))
     state = start if start is not None else LoopState(0, np.zeros(sysm.m))
     # (completed, w of the next level, warm start): replaced as one tuple, so that a
     # signal arriving between two statements never sees a half-updated state

@@ -146,7 +146,7 @@ def simulate(
     progress: bool = False,
     store: str | ArrayLike = "all",
     every: int = 1,
-    recover_block: int = 32,
+    recover_block: int | None = None,
     resume: Result | None = None,
     callback: Callable[[int, StepSolution], None] | None = None,
     initial_wear: ArrayLike | None = None,
@@ -177,8 +177,9 @@ def simulate(
     every : int
         Keep the contact arrays of every ``every``-th level (and of the final level and
         the levels of ``store``); 1 keeps all.
-    recover_block : int
-        Number of levels whose displacements the condensed solver recovers together.
+    recover_block : int, optional
+        Number of levels whose displacements the condensed solver recovers together
+        (default: :func:`~vemwear.simulate.levels.recover_block_size`).
     resume : Result, optional
         A partial result of the same problem (``completed < len(t)``); the run goes on
         from its first unfinished level, warm-started as an uninterrupted run would

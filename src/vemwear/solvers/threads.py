@@ -4,10 +4,12 @@ NumPy's and SciPy's wheels each bundle an OpenBLAS with its own pool of threads,
 MKL (PARDISO) brings a third. On a machine with few cores these pools spin against
 each other: a multi-column SuperLU solve or a small dense Cholesky factorization can
 become ten times slower, at random. :func:`solver_threads` limits the OpenBLAS pools
-to one thread while the solver's dense and sparse kernels run and leaves MKL's pool
-(the multithreaded PARDISO factorization) alone. The limits are set and restored
-through one cached :class:`threadpoolctl.ThreadpoolController` (about 20 µs a
-context), so callers enter the context around whole kernels, not around tiny ones.
+to one thread while the solver's dense and sparse kernels run, and
+:func:`~vemwear.simulate.levels.run_levels` keeps them there for a whole run, so that
+no pool woken by a NumPy product spins against MKL's threads (the multithreaded
+PARDISO factorization and solves, which keep their threads). The limits are set and
+restored through one cached :class:`threadpoolctl.ThreadpoolController` (about 20 µs
+a context), so callers enter the context around whole kernels, not around tiny ones.
 
 ``VEMWEAR_BLAS_THREADS=keep`` in the environment turns the control off (for
 measurements of the uncontrolled behaviour).

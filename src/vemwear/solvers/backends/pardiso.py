@@ -19,14 +19,6 @@ factorization phase.
 
 The handle ``pt`` of a factorization is released (phase -1) when its object is
 garbage collected.
-
-Threads: a matrix of fewer than :data:`SERIAL_BELOW` unknowns is factorized and
-solved with one MKL thread (set per call with ``MKL_Set_Num_Threads_Local``, which
-leaves the rest of the process alone). On 2 cores the second thread made runs of
-that size slower, not faster, and their timings scattered: a whole condensed run at
-66k unknowns took 0.44 s median with 27 % between the fastest and slowest of 11
-repeats, 0.41 s and 13 % with one thread; at 131k unknowns two threads win (0.92 s
-against 1.04 s). ``benchmarks/bench_threads.py`` measures it.
 """
 
 from __future__ import annotations
@@ -66,10 +58,6 @@ _ERRORS = {
 }
 
 
-#: Matrices with fewer unknowns run PARDISO with one MKL thread (see the module notes).
-SERIAL_BELOW = 100_000
-
-
 def available() -> bool:
     """True when MKL's PARDISO can be loaded (``pypardiso`` installed with MKL)."""
     try:
@@ -102,16 +90,6 @@ def _mkl_rt() -> Any:
     import pypardiso  # searches everywhere; raises when MKL is missing
 
     return pypardiso.ps.libmkl
-
-
-@cache
-def _local_threads() -> Any:
-    """MKL's ``MKL_Set_Num_Threads_Local`` (thread count of the calling thread only;
-    0 restores the global setting), or None when the library lacks it."""
-    f = getattr(_mkl_rt(), "MKL_Set_Num_Threads_Local", None)
-    if f is not None:
-        f.argtypes, f.restype = [ctypes.c_int], ctypes.c_int
-    return f
 
 
 @cache
@@ -159,13 +137,11 @@ class _Handle:
             self.iparm[k] = v
         self.perm = np.zeros(self.n, dtype=np.int32) if perm is None else perm
         self.live = False
-        self.threads = _local_threads() if self.n < SERIAL_BELOW else None
 
     def __call__(self, phase: int, b: NDArray, x: NDArray, nrhs: int = 1) -> None:
         i32 = ctypes.c_int32
         i32p = ctypes.POINTER(i32)
         err = i32(0)
-        before = self.threads(1) if self.threads is not None else None
         self.f(
             self.pt.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
             ctypes.byref(i32(1)),
@@ -184,8 +160,6 @@ class _Handle:
             x.ctypes.data,
             ctypes.byref(err),
         )
-        if before is not None:
-            self.threads(before)
         if phase > 0:
             self.live = True
         if err.value != 0:
