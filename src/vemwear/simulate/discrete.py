@@ -329,11 +329,10 @@ class Discretization:
             con, cb, s = self.constraints, self.contact, self.system
             d = self.dim
             cols = con.owner * d + con.dofs % d  # (part, component) of each constrained dof
-            E = sp.csr_matrix(
-                (np.ones(len(con.dofs)), (np.arange(len(con.dofs)), cols)),
-                shape=(len(con.dofs), d * len(con.parts)),
-            )
-            B = np.asarray((self._K_fc @ E).todense())
+            # E^T: (part, component) <- constrained dof, a 0/1 matrix, dense (d P rows)
+            ET = np.zeros((d * len(con.parts), len(con.dofs)))
+            ET[cols, np.arange(len(con.dofs))] = 1.0
+            B = self._K_fc @ ET.T  # K_fc E: sparse times a thin dense block
             factor = getattr(solver, "factor", None)
             if factor is not None:
                 Z = factor.solve(B)
@@ -343,13 +342,17 @@ class Discretization:
                 Z = spla.splu(s.K.tocsc()).solve(B)
             Z = np.asarray(Z).reshape(len(self.free), -1)
             self._K_cc = self.K_full[con.dofs][:, con.dofs].tocsr()
-            # the contact forces on constrained components (None: there are none)
-            Nc, Tc = cb.N[:, con.dofs].T.tocsr(), cb.Tau[:, con.dofs].T.tocsr()
-            if Nc.nnz == 0 and Tc.nnz == 0:
-                Nc = Tc = None
+            # the contact forces on constrained components (None: there are none, the
+            # usual case, told by the column indices without slicing)
+            on = np.zeros(self.n_dof, dtype=bool)
+            on[con.dofs] = True
+            Nc = Tc = None
+            N, Tau = cb.N, cb.Tau
+            if on[N.indices].any() or on[Tau.indices].any():
+                Nc, Tc = N[:, con.dofs].T.tocsr(), Tau[:, con.dofs].T.tocsr()
             self._reaction = _Reactions(
                 Z=Z,
-                ET=np.asarray(E.T.todense()),
+                ET=ET,
                 ZN=np.asarray(s.N @ Z).T,
                 ZT=np.asarray(s.Tau @ Z).T,
                 Nc=Nc,
