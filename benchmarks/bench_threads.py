@@ -13,7 +13,8 @@ each case (imports and first allocations), of:
   (what follows every Schur complement), after a NumPy matrix product that wakes
   NumPy's own pool;
 * ``condensed run``: a whole condensed-Newton run of Example 5.5's data at 1/h =
-  ``--n`` with the default backend (factorization, steps, recovery at every level).
+  ``--n`` with the default backend (factorization, steps, recovery at every level);
+  also with MKL's pool (PARDISO's threads) at one thread.
 
 Usage::
 
@@ -30,7 +31,7 @@ import time
 
 def _row(name: str, v: list[float], unit: str) -> str:
     lo, med, hi = min(v), statistics.median(v), max(v)
-    return f"{name:<26} {lo:10.4f} {med:10.4f} {hi:10.4f} {unit:<8} spread {100 * (hi / lo - 1):6.1f} %"
+    return f"{name:<40} {lo:10.4f} {med:10.4f} {hi:10.4f} {unit:<8} spread {100 * (hi / lo - 1):6.1f} %"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -81,20 +82,35 @@ def main(argv: list[str] | None = None) -> int:
     times: dict[tuple[str, str], list[float]] = {}
     for fn, _unit in cases.values():  # first calls (imports, first allocations) untimed
         fn()
+    # the whole run once more with MKL's pool (PARDISO) at one thread: the cost of the
+    # second thread against the spread it brings on a machine with two cores
+    from threadpoolctl import ThreadpoolController
+
+    mkl = ThreadpoolController().select(internal_api="mkl")
+
+    def run_mkl1() -> float:
+        with mkl.limit(limits=1):
+            return run()
+
+    modes = ("controlled", "uncontrolled", "controlled, MKL 1 thread")
     for _ in range(a.repeat):
-        for mode in ("controlled", "uncontrolled"):
+        for mode in modes:
             if mode == "uncontrolled":
                 os.environ["VEMWEAR_BLAS_THREADS"] = "keep"
             else:
                 os.environ.pop("VEMWEAR_BLAS_THREADS", None)
+            if mode == modes[2]:
+                times.setdefault(("condensed run", mode), []).append(run_mkl1())
+                continue
             for name, (fn, _unit) in cases.items():
                 times.setdefault((name, mode), []).append(fn())
     os.environ.pop("VEMWEAR_BLAS_THREADS", None)
     print(f"1/h = {a.n}: {s.n_free} unknowns, {a.repeat} interleaved repeats")
-    print(f"{'case':<26} {'min':>10} {'median':>10} {'max':>10}")
+    print(f"{'case':<40} {'min':>10} {'median':>10} {'max':>10}")
     for name, (_fn, unit) in cases.items():
-        for mode in ("controlled", "uncontrolled"):
-            print(_row(f"{name} ({mode})", times[(name, mode)], unit))
+        for mode in modes:
+            if (name, mode) in times:
+                print(_row(f"{name} ({mode})", times[(name, mode)], unit))
     libs = ", ".join(f"{d['internal_api']}:{d['num_threads']}" for d in blas_info())
     print(f"BLAS pools: {libs}")
     return 0
