@@ -30,7 +30,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .polymesh import PARTS, MeshError, checked_tags
+from .polymesh import PARTS, BoundaryParts, MeshError, checked_tags
 
 __all__ = ["Mesh3D"]
 
@@ -46,7 +46,7 @@ def _csr(offsets: NDArray, values: NDArray, name: str) -> tuple[NDArray, NDArray
 
 
 @dataclass(frozen=True, eq=False)
-class Mesh3D:
+class Mesh3D(BoundaryParts):
     """Polyhedral mesh with tagged boundary faces.
 
     Parameters
@@ -244,17 +244,6 @@ class Mesh3D:
         sign = np.zeros(self.n_faces, dtype=np.int8)
         sign[self.cell_faces] = self.cell_face_signs  # boundary faces occur once
         return sign[self.boundary_faces]
-
-    @property
-    def parts(self) -> tuple[str, ...]:
-        """Names of the parts that have boundary faces, in code order."""
-        present = set(np.unique(np.asarray(self.boundary_tags)).tolist())
-        return tuple(n for i, n in enumerate(self.part_names) if i + 1 in present)
-
-    def part_counts(self) -> dict[str, int]:
-        """Boundary faces of every named part."""
-        tags = np.asarray(self.boundary_tags)
-        return {p: int(np.sum(tags == i + 1)) for i, p in enumerate(self.part_names)}
 
     def part_faces(self, name: str) -> NDArray[np.int64]:
         """Face ids of the boundary part ``name`` (an unknown name has none)."""

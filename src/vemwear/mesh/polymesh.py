@@ -62,6 +62,26 @@ def part_names_with(names: Sequence[str], more: Sequence[str]) -> tuple[str, ...
     return tuple(out)
 
 
+class BoundaryParts:
+    """The named boundary parts of a mesh, from its ``boundary_tags`` (code ``i + 1``
+    for ``part_names[i]``, 0 untagged): shared by :class:`Mesh` (edges) and
+    :class:`~vemwear.mesh.polyhedra.Mesh3D` (faces)."""
+
+    boundary_tags: NDArray[np.int8] | None
+    part_names: tuple[str, ...]
+
+    @property
+    def parts(self) -> tuple[str, ...]:
+        """Names of the parts that have boundary edges (faces in 3D), in code order."""
+        present = set(np.unique(np.asarray(self.boundary_tags)).tolist())
+        return tuple(n for i, n in enumerate(self.part_names) if i + 1 in present)
+
+    def part_counts(self) -> dict[str, int]:
+        """Boundary edges (faces in 3D) of every named part, empty ones included."""
+        tags = np.asarray(self.boundary_tags)
+        return {p: int(np.sum(tags == i + 1)) for i, p in enumerate(self.part_names)}
+
+
 class MeshError(ValueError):
     """A mesh that is not valid for the method; the message names cells or vertices."""
 
@@ -85,7 +105,7 @@ def checked_tags(
 
 
 @dataclass(frozen=True, eq=False)
-class Mesh:
+class Mesh(BoundaryParts):
     """Polygonal mesh with tagged boundary edges.
 
     Parameters
@@ -264,17 +284,6 @@ class Mesh:
     def part_code(self, name: str) -> int:
         """The code of a part of this mesh (ValueError naming the parts if unknown)."""
         return part_code(name, self.part_names)
-
-    @property
-    def parts(self) -> tuple[str, ...]:
-        """Names of the parts that have boundary edges, in code order."""
-        present = set(np.unique(np.asarray(self.boundary_tags)).tolist())
-        return tuple(n for i, n in enumerate(self.part_names) if i + 1 in present)
-
-    def part_counts(self) -> dict[str, int]:
-        """Boundary edges of every named part (the paper's three always listed)."""
-        tags = np.asarray(self.boundary_tags)
-        return {p: int(np.sum(tags == i + 1)) for i, p in enumerate(self.part_names)}
 
     def has_part(self, name: str) -> bool:
         """Whether the part exists and has boundary edges."""

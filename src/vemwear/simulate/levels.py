@@ -54,8 +54,7 @@ def recover_block_size(n_free: int, n_stored: int) -> int:
 
 # OpenBLAS's pools stay at one thread for the whole run, not only around the solver's
 # kernels: a pool woken by any NumPy product spins against MKL's threads (PARDISO) on
-# a small machine (a whole run at 16k unknowns, repeated in-process on 2 cores: 0.056-0.060 s
-# median without, 0.035-0.042 s with).
+# a small machine and slows them down (benchmarks/bench_threads.py shows the stalls).
 @solver_threads()
 def run_levels(
     problem: Problem,
