@@ -121,6 +121,28 @@ def test_pardiso_full_and_partial_solves_agree(small_problem):
 
 
 @needs_pardiso
+@pytest.mark.parametrize(("factor_threads", "solve_threads"), [(2, 1), (1, 2)])
+def test_pardiso_solves_whatever_mkl_threads_the_caller_sets(factor_threads, solve_threads):
+    """MKL's one-column solve after a Schur factorization is wrong when MKL's thread
+    count changed since the factorization (seen with MKL 2026.2 from 4,224 unknowns
+    on); the handle pins it."""
+    from threadpoolctl import ThreadpoolController
+
+    s = ex52.problem(0.2, 2.0, divisions=(64, 32), steps=1).discrete.system
+    schur_factorize(s.K, s.contact_dofs.ravel(), s.dof_points, "pardiso")  # MKL loaded
+    mkl = ThreadpoolController().select(internal_api="mkl")
+    assert mkl.lib_controllers, "MKL is not seen by threadpoolctl"
+    with mkl.limit(limits=factor_threads):
+        f = schur_factorize(s.K, s.contact_dofs.ravel(), s.dof_points, "pardiso")
+    rng = np.random.default_rng(5)
+    for k in (1, 3):
+        b = rng.normal(size=s.n_free) if k == 1 else rng.normal(size=(s.n_free, k))
+        with mkl.limit(limits=solve_threads):
+            x = f.solve(b)
+        assert rel(s.K @ x, b) <= 1e-12
+
+
+@needs_pardiso
 def test_pardiso_rejects_a_matrix_that_is_not_spd(small_problem):
     s = small_problem.discrete.system
     with pytest.raises(RuntimeError, match="not positive definite"):

@@ -93,6 +93,16 @@ def _mkl_rt() -> Any:
 
 
 @cache
+def _thread_functions() -> tuple[Any, Any]:
+    """MKL's ``mkl_get_max_threads`` and ``mkl_set_num_threads_local``."""
+    lib = _mkl_rt()
+    get, local = lib.MKL_Get_Max_Threads, lib.MKL_Set_Num_Threads_Local
+    get.argtypes, get.restype = [], ctypes.c_int
+    local.argtypes, local.restype = [ctypes.c_int], ctypes.c_int
+    return get, local
+
+
+@cache
 def _routine() -> Any:
     """MKL's ``pardiso`` C routine with its argument types."""
     f = _mkl_rt().pardiso
@@ -137,8 +147,24 @@ class _Handle:
             self.iparm[k] = v
         self.perm = np.zeros(self.n, dtype=np.int32) if perm is None else perm
         self.live = False
+        #: MKL threads of the analysis and factorization, pinned for every later phase
+        self.threads = 0
 
     def __call__(self, phase: int, b: NDArray, x: NDArray, nrhs: int = 1) -> None:
+        # A solve must run with the thread count of the factorization: MKL 2026's
+        # one-column solve after a Schur factorization returns garbage otherwise (a
+        # backward error of 1e2-1e8 when a caller changes MKL's threads in between,
+        # e.g. with threadpoolctl; tests/test_backends.py)
+        get_threads, set_local = _thread_functions()
+        if self.threads == 0:
+            self.threads = int(get_threads())
+        previous = set_local(self.threads)
+        try:
+            self._call(phase, b, x, nrhs)
+        finally:
+            set_local(previous)
+
+    def _call(self, phase: int, b: NDArray, x: NDArray, nrhs: int) -> None:
         i32 = ctypes.c_int32
         i32p = ctypes.POINTER(i32)
         err = i32(0)
