@@ -263,3 +263,38 @@ def test_two_contact_parts_with_their_own_data() -> None:
         normal = F[1:, i, 1] * ny  # the layer pushes the body away from it
         assert np.all(normal > 0)
         assert np.abs(F[1:, i, 0] - mu * vx * normal).max() < 1e-14 * np.abs(normal).max()
+
+
+def test_reactions_are_the_residual_of_the_recovered_displacement() -> None:
+    """The reactions of the clamped and the prescribed part, computed from the condensed
+    data, are ``K u - f_h`` plus the layer forces summed over each part's constrained
+    dofs with the recovered u; the corner contact nodes have constrained components, so
+    the layer forces on constrained dofs are part of it."""
+    d = variant(
+        boundary={
+            "clamped": "left",
+            "contact": "bottom",
+            "free": "top",
+            "displacement": [{"name": "squeeze", "on": "right", "ux": "-0.2*t"}],
+        },
+    )
+    pr = parse(d).problem
+    r = simulate(pr, "newton")
+    disc, con, cb = pr.discrete, pr.constraints, pr.contact
+    assert r.force_parts[-2:] == (("clamped", "reaction"), ("squeeze", "reaction"))
+    on_constrained = np.isin(np.concatenate([cb.N.indices, cb.Tau.indices]), con.dofs)
+    assert on_constrained.any()  # the corners: contact nodes with constrained components
+    for j, level in enumerate(r.u_levels):
+        t = float(r.t[level])
+        u = r.u[j].ravel()
+        fric = disc.tangential_velocity(t)  # v* . tau: the friction is -mu sign of it
+        w = cb.weights
+        p_soft, p_rigid = r.p_soft[level], r.p_rigid[level]
+        layer = cb.N.T @ (w * (p_soft + p_rigid)) + cb.Tau.T @ (
+            w * pr.nodal["mu"] * -np.sign(fric) * p_soft
+        )
+        residual = disc.K_full @ u - pr.external_load(t) + layer
+        want = np.zeros((len(con.parts), 2))
+        np.add.at(want, (con.owner, con.dofs % 2), residual[con.dofs])
+        got = r.forces[level, -2:]
+        assert np.abs(got - want).max() <= 1e-10 * np.abs(want).max()

@@ -49,19 +49,18 @@ class _Sliding:
 
 
 @dataclasses.dataclass
-class _Reactions:
-    """Operators of the reactions (:meth:`Discretization.resultants`)."""
+class _Resultants:
+    """The force resultants as an affine map of the layer forces (:meth:`Discretization.
+    resultants`): ``A @ [W (p_soft + p_rigid); W fric p_soft] + b``, flattened rows
+    (part, component); ``b`` holds the reactions to the load and the prescribed values,
+    ``b_F`` the load vector it was computed for."""
 
-    Z: NDArray[np.float64]
-    ET: NDArray[np.float64]
-    ZN: NDArray[np.float64]
-    ZT: NDArray[np.float64]
-    Nc: sp.csr_matrix | None
-    Tc: sp.csr_matrix | None
-    F: Any = None
-    ZF: Any = None
-    static: Any = None
-    ET_static: Any = None
+    A: NDArray[np.float64]
+    ZT: NDArray[np.float64] | None = None
+    ET: NDArray[np.float64] | None = None
+    b: NDArray[np.float64] | None = None
+    b_F: Any = None
+    x: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(0))
 
 
 class Discretization:
@@ -135,7 +134,7 @@ class Discretization:
         )
         self._F0: NDArray | None = None
         self._solvers: dict[Any, Any] = {}
-        self._reaction: _Reactions | None = None
+        self._resultants: _Resultants | None = None
         self._sliding_at: _Sliding | None = None
         self._K_cc = sp.csr_matrix((0, 0))
         self._Fc0: NDArray | None = None
@@ -290,46 +289,45 @@ class Discretization:
         part, ``(K u - f_h)`` summed over its constrained dofs (the contact forces on
         prescribed components of contact nodes included). The reactions come from the
         condensed data, without recovering u: ``K_cf u_f = Z^T (F - forces_f)`` with
-        ``Z = K_ff^{-1} K_fc E`` computed once."""
-        cb, con = self.contact, self.constraints
-        p_soft, p_rigid = solution.p_soft, solution.p_rigid
-        normal = cb.weights * (p_soft + p_rigid)
-        tangent = cb.weights * step.fric * p_soft
-        node_force = -(normal[:, None] * cb.normals + tangent[:, None] * cb.tangents)
-        out = np.zeros((len(cb.part_names) + len(con.parts), self.dim))
-        if len(cb.part_names) == 1:
-            out[0] = node_force.sum(axis=0)
-        else:
-            for c in range(self.dim):
-                out[: len(cb.part_names), c] = np.bincount(
-                    cb.part, node_force[:, c], minlength=len(cb.part_names)
-                )
-        if not con.parts:
-            return out
-        op = self._reaction_operators(solver)
-        if step.F is not op.F:  # Z^T F once per load vector (a constant load: once)
-            op.F, op.ZF = step.F, op.Z.T @ step.F
-        if op.static is None or not self._constant_load:
-            op.static = self._K_cc @ con.values(step.t) - self._F_ext_c(step.t)
-            op.ET_static = None
-        if op.Nc is not None and op.Tc is not None:  # contact forces on constrained dofs
-            constrained = op.ET @ (op.static + (op.Nc @ normal + op.Tc @ tangent))
-        else:  # none (no contact node on a constrained part): once per static load
-            if op.ET_static is None:
-                op.ET_static = op.ET @ op.static
-            constrained = op.ET_static
-        reaction = op.ZF - op.ZN @ normal - op.ZT @ tangent + constrained
-        out[len(cb.part_names) :] = reaction.reshape(-1, self.dim)
-        return out
+        ``Z = K_ff^{-1} K_fc E`` computed once. All rows are one affine map of the layer
+        forces, built once (:meth:`_resultant_map`): a level costs one (d P, 2m) product."""
+        op = self._resultant_map(solver)
+        m = self.contact.m
+        x, w = op.x, self.contact.weights
+        np.add(solution.p_soft, solution.p_rigid, out=x[:m])
+        x[:m] *= w
+        np.multiply(step.fric, solution.p_soft, out=x[m:])
+        x[m:] *= w
+        out = op.A @ x
+        if op.ZT is not None:  # reactions: Z^T F and the static part, once per load
+            if op.b is None or step.F is not op.b_F or not self._constant_load:
+                static = self._K_cc @ self.constraints.values(step.t) - self._F_ext_c(step.t)
+                b = np.zeros(len(out))
+                b[len(out) - len(op.ZT) :] = op.ZT @ step.F + op.ET @ static
+                op.b, op.b_F = b, step.F
+            out += op.b
+        return out.reshape(-1, self.dim)
 
-    def _reaction_operators(self, solver: Any) -> _Reactions:
-        """The operators of the reactions, built once: ``Z`` and its products with the
-        contact operators, so that a level costs O(m) besides ``Z^T F`` per load."""
-        if self._reaction is None:
-            con, cb, s = self.constraints, self.contact, self.system
-            d = self.dim
+    def _resultant_map(self, solver: Any) -> _Resultants:
+        """The affine map of :meth:`resultants`, built once. Its rows: each contact
+        part's ``-sum_a`` over its nodes of ``nu_a`` and ``tau_a`` times the two layer
+        forces; each constrained part's ``-Z^T (N^T, Tau^T)`` plus ``E^T`` of the layer
+        forces on constrained components (``E``: the 0/1 matrix of (part, component)
+        of each constrained dof)."""
+        if self._resultants is not None:
+            return self._resultants
+        cb, con, d = self.contact, self.constraints, self.dim
+        m, P = cb.m, len(cb.part_names)
+        # contact parts: rows (part, component), columns (normal force, tangential force)
+        A_c = np.zeros((P, d, 2, m))
+        for c in range(d):
+            A_c[cb.part, c, 0, np.arange(m)] = -cb.normals[:, c]
+            A_c[cb.part, c, 1, np.arange(m)] = -cb.tangents[:, c]
+        A = A_c.reshape(P * d, 2 * m)
+        op = _Resultants(A=A, x=np.zeros(2 * m))
+        if con.parts:
+            s = self.system
             cols = con.owner * d + con.dofs % d  # (part, component) of each constrained dof
-            # E^T: (part, component) <- constrained dof, a 0/1 matrix, dense (d P rows)
             ET = np.zeros((d * len(con.parts), len(con.dofs)))
             ET[cols, np.arange(len(con.dofs))] = 1.0
             B = self._K_fc @ ET.T  # K_fc E: sparse times a thin dense block
@@ -340,25 +338,20 @@ class Discretization:
                 import scipy.sparse.linalg as spla
 
                 Z = spla.splu(s.K.tocsc()).solve(B)
-            Z = np.asarray(Z).reshape(len(self.free), -1)
+            ZT = np.ascontiguousarray(np.asarray(Z).reshape(len(self.free), -1).T)
             self._K_cc = self.K_full[con.dofs][:, con.dofs].tocsr()
-            # the contact forces on constrained components (None: there are none, the
-            # usual case, told by the column indices without slicing)
+            A_r = -np.hstack([np.asarray(s.N @ ZT.T).T, np.asarray(s.Tau @ ZT.T).T])
+            # the layer forces on constrained components (usually none: told by the
+            # operators' column indices without slicing)
             on = np.zeros(self.n_dof, dtype=bool)
             on[con.dofs] = True
-            Nc = Tc = None
             N, Tau = cb.N, cb.Tau
             if on[N.indices].any() or on[Tau.indices].any():
-                Nc, Tc = N[:, con.dofs].T.tocsr(), Tau[:, con.dofs].T.tocsr()
-            self._reaction = _Reactions(
-                Z=Z,
-                ET=ET,
-                ZN=np.asarray(s.N @ Z).T,
-                ZT=np.asarray(s.Tau @ Z).T,
-                Nc=Nc,
-                Tc=Tc,
-            )
-        return self._reaction
+                A_r[:, :m] += (N[:, con.dofs] @ ET.T).T
+                A_r[:, m:] += (Tau[:, con.dofs] @ ET.T).T
+            op.A, op.ZT, op.ET = np.vstack([A, A_r]), ZT, ET
+        self._resultants = op
+        return op
 
     def _F_ext_c(self, t: float) -> NDArray[np.float64]:
         """The external load on the constrained dofs at time t."""
@@ -374,13 +367,14 @@ class Discretization:
         self, solution: StepSolution, step: StepData | None = None, solver: Any = None
     ) -> StepSolution:
         """The solution with its true normal displacement ``u_nu = y + offset`` and, with
-        ``step`` and ``solver``, its force resultants (:meth:`resultants`)."""
-        changes: dict[str, Any] = {}
-        if self._offset_nonzero:
-            changes["u_nu"] = solution.u_nu + self.offset
+        ``step`` and ``solver``, its force resultants (:meth:`resultants`). The forces
+        are set on ``solution`` itself; a new solution carries the shifted ``u_nu``, so
+        that ``solution`` stays the solver's warm start (y, not u_nu)."""
         if step is not None:
-            changes["forces"] = self.resultants(step, solution, solver)
-        return dataclasses.replace(solution, **changes) if changes else solution
+            solution.forces = self.resultants(step, solution, solver)
+        if self._offset_nonzero:
+            return dataclasses.replace(solution, u_nu=solution.u_nu + self.offset)
+        return solution
 
     @functools.cached_property
     def _offset_nonzero(self) -> bool:
