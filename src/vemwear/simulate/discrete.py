@@ -133,6 +133,7 @@ class Discretization:
             or con.time_dependent
         )
         self._F0: NDArray | None = None
+        self._F_all: NDArray | None = None
         self._solvers: dict[Any, Any] = {}
         self._resultants: _Resultants | None = None
         self._sliding_at: _Sliding | None = None
@@ -206,10 +207,7 @@ class Discretization:
         edge quadrature, the lifting of prescribed displacements)."""
         if self._constant_load and self._F0 is not None:
             return self._F0
-        pr = self.problem
-        with np.errstate(all="ignore"):
-            F = pr.external_load(t)
-        F = F[self.free]
+        F = self._external_load(t)[self.free]
         if self.K_fc is not None:
             F = F - self.K_fc @ self.constraints.values(t)
         if not np.all(np.isfinite(F)):
@@ -299,9 +297,14 @@ class Discretization:
         np.multiply(step.fric, solution.p_soft, out=x[m:])
         x[m:] *= w
         out = op.A @ x
-        if op.ZT is not None:  # reactions: Z^T F and the static part, once per load
+        if (
+            op.ZT is not None and op.ET is not None
+        ):  # reactions: Z^T F and the static part, once per load
             if op.b is None or step.F is not op.b_F or not self._constant_load:
-                static = self._K_cc @ self.constraints.values(step.t) - self._F_ext_c(step.t)
+                con = self.constraints
+                static = -self._F_ext_c(step.t)
+                if not con.zero:  # K_cc u_c of the prescribed values
+                    static = static + np.asarray(self._K_cc @ con.values(step.t))
                 b = np.zeros(len(out))
                 b[len(out) - len(op.ZT) :] = op.ZT @ step.F + op.ET @ static
                 op.b, op.b_F = b, step.F
@@ -339,7 +342,8 @@ class Discretization:
 
                 Z = spla.splu(s.K.tocsc()).solve(B)
             ZT = np.ascontiguousarray(np.asarray(Z).reshape(len(self.free), -1).T)
-            self._K_cc = self.K_full[con.dofs][:, con.dofs].tocsr()
+            if not con.zero:
+                self._K_cc = self.K_full[con.dofs][:, con.dofs].tocsr()
             A_r = -np.hstack([np.asarray(s.N @ ZT.T).T, np.asarray(s.Tau @ ZT.T).T])
             # the layer forces on constrained components (usually none: told by the
             # operators' column indices without slicing)
@@ -357,10 +361,20 @@ class Discretization:
         """The external load on the constrained dofs at time t."""
         if self._Fc0 is not None:
             return self._Fc0
-        with np.errstate(all="ignore"):
-            F = self.problem.external_load(t)[self.constraints.dofs]
+        F = self._external_load(t)[self.constraints.dofs]
         if self._constant_load:
             self._Fc0 = F
+        return F
+
+    def _external_load(self, t: float) -> NDArray[np.float64]:
+        """``f_h(t)`` on all dofs (body force and tractions), assembled once for a
+        constant load (the free and the constrained dofs share it)."""
+        if self._F_all is not None:
+            return self._F_all
+        with np.errstate(all="ignore"):
+            F = self.problem.external_load(t)
+        if self._constant_load:
+            self._F_all = F
         return F
 
     def physical(
@@ -391,14 +405,19 @@ class Discretization:
             u[self.constraints.dofs] = self.constraints.values(t)
         return u
 
-    def full_dofs_block(self, X: NDArray[np.float64], times: list[float]) -> NDArray:
+    def full_dofs_block(
+        self, X: NDArray[np.float64], times: list[float], out: NDArray[np.float64] | None = None
+    ) -> NDArray:
         """:meth:`full_dofs` of the columns of ``X`` (n_free, k) at their ``times``, as
-        the rows of a (k, n_dofs) array: one pass for a block of levels."""
-        U = np.zeros((X.shape[1], self.n_dof))
+        the rows of a (k, n_dofs) array (``out`` when given): one pass for a block."""
+        con = self.constraints
+        U = np.empty((X.shape[1], self.n_dof)) if out is None else out
         U[:, self.free] = X.T
-        if not self.constraints.zero:
+        if con.zero:
+            U[:, con.dofs] = 0.0
+        else:
             for j, t in enumerate(times):
-                U[j, self.constraints.dofs] = self.constraints.values(t)
+                U[j, con.dofs] = con.values(t)
         return U
 
     def full_displacement(

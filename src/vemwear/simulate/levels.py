@@ -143,6 +143,8 @@ def run_levels(
     # sinks with a ``dofs`` method also get every dof of a higher-order space (k = 2:
     # the edge and cell means besides the vertex values), e.g. for the ParaView output
     put_dofs = getattr(sink, "dofs", None) if d.space.order > 1 else None
+    # sinks that keep the displacements in memory take a block's rows in place
+    sink_rows = getattr(sink, "displacement_rows", None)
 
     def give(n_: int, full: Any, res: Any) -> None:
         sink.displacement(n_, d.space.vertex_values(full), res)
@@ -171,7 +173,8 @@ def run_levels(
         fulls = kkt_residuals_block(
             sysm, [st for _, _, st, _ in pending], X, [so.p_rigid for *_, so in pending]
         )
-        U = d.full_dofs_block(X, [st.t for _, _, st, _ in pending])
+        rows = sink_rows([n_ for n_, *_ in pending]) if sink_rows is not None else None
+        U = d.full_dofs_block(X, [st.t for _, _, st, _ in pending], out=rows)
         for j, (n_, _, st, so) in enumerate(pending):
             full = fulls[j]
             check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)

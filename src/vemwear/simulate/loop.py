@@ -290,9 +290,22 @@ class MemorySink:
     def displacement(
         self, n: int, u: NDArray[np.float64], residuals: NDArray[np.float64] | None
     ) -> None:
-        self.result.u[self.slot[n]] = u
+        dest = self.result.u[self.slot[n]]
+        if u.ctypes.data != dest.ctypes.data:  # not written in place already
+            dest[...] = u
         if residuals is not None and self.row[n] >= 0:
             self.result.residuals[self.row[n]] = residuals
+
+    def displacement_rows(self, levels: list[int]) -> NDArray[np.float64] | None:
+        """The rows of ``u`` of these stored levels as one (k, n_dofs) array, when they
+        are consecutive and hold every dof (k = 1): the loop writes them in place."""
+        out = self.result
+        if out.dofs is not None or not levels:
+            return None
+        first = int(self.slot[levels[0]])
+        if list(self.slot[levels]) != list(range(first, first + len(levels))):
+            return None
+        return out.u[first : first + len(levels)].reshape(len(levels), -1)
 
     def dofs(self, n: int, u: NDArray[np.float64]) -> None:
         """Every dof of the displacement at level n (spaces of order k > 1)."""

@@ -120,6 +120,12 @@ class LevelSink(Protocol):
         """Make every level handed over so far durable together with ``state``."""
 
 
+# A sink may also have ``dofs(n, u)`` (every dof of a higher-order space) and
+# ``displacement_rows(levels)``: the (k, n_dofs) array where it keeps the displacements
+# of these stored levels, for the loop to write them in place (or None), before it
+# hands each row over by ``displacement`` as usual.
+
+
 _SOLUTION = ("u_nu", "p_rigid", "p_soft")
 
 

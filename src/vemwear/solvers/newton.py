@@ -191,8 +191,11 @@ class CondensedNewton:
         if self._rhs.shape[1] < k:
             self._rhs = np.empty((s.n_free, k), order="F")
         rhs = self._rhs[:, :k]
-        for j, st in enumerate(steps):
-            rhs[:, j] = st.F
+        if all(st.F is steps[0].F for st in steps):  # a constant load: one broadcast
+            rhs[...] = steps[0].F[:, None]
+        else:
+            for j, st in enumerate(steps):
+                rhs[:, j] = st.F
         # N and Tau act on the contact dofs only: (2m, k) products, not (n, k) ones
         NT, TT = s.force_operators
         rhs[s.contact_cols] -= NT @ P + TT @ Q
