@@ -4,8 +4,9 @@ NumPy's and SciPy's wheels each bundle an OpenBLAS with its own thread pool, and
 PARDISO brings MKL's. The solver limits the OpenBLAS pools to one thread around its
 kernels (:mod:`vemwear.solvers.threads`); ``VEMWEAR_BLAS_THREADS=keep`` turns that
 off. This script runs the same work with the control on and off, interleaved, and
-prints min / median / max and the spread (max / min - 1), after one untimed call of
-each case (imports and first allocations), of:
+prints min / median / max, the spread (max / min - 1) and how many repeats lie within
+10 % of the median, after one untimed call of each case (imports and first
+allocations), of:
 
 * ``superlu block``: a ``--rhs``-column solve with the condensed path's SuperLU
   factors (seconds per column);
@@ -31,7 +32,11 @@ import time
 
 def _row(name: str, v: list[float], unit: str) -> str:
     lo, med, hi = min(v), statistics.median(v), max(v)
-    return f"{name:<40} {lo:10.4f} {med:10.4f} {hi:10.4f} {unit:<8} spread {100 * (hi / lo - 1):6.1f} %"
+    near = sum(abs(x / med - 1) <= 0.1 for x in v)  # repeats within 10 % of the median
+    return (
+        f"{name:<40} {lo:10.4f} {med:10.4f} {hi:10.4f} {unit:<8} spread "
+        f"{100 * (hi / lo - 1):6.1f} %  within 10 %: {near:2d}/{len(v)}"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

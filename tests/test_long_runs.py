@@ -23,7 +23,7 @@ import pytest
 
 from conftest import small_config
 
-STEPS = 12000  # about 2-3 s of solving on 16 x 8 squares
+STEPS = 12000  # about 0.5 s of solving on 16 x 8 squares
 
 LONG = small_config(
     "long run",
@@ -73,6 +73,18 @@ def reference(config: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[st
     return arrays(out)
 
 
+#: Steps of the run killed with SIGKILL: long enough (about 2.5 s here) that the kill
+#: lands well inside the time loop on a faster machine too.
+KILL_STEPS = 60000
+
+
+@pytest.fixture(scope="module")
+def long_config(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    p = tmp_path_factory.mktemp("longer") / "longer.toml"
+    p.write_text(LONG.replace(f"steps = {STEPS}", f"steps = {KILL_STEPS}"))
+    return p
+
+
 def assert_same(out: Path, reference: dict[str, np.ndarray]) -> None:
     got = arrays(out)
     assert got.keys() == reference.keys()
@@ -80,9 +92,11 @@ def assert_same(out: Path, reference: dict[str, np.ndarray]) -> None:
         assert got[k].dtype == v.dtype and np.array_equal(got[k], v), k
 
 
-def test_sigkill_after_a_checkpoint_resumes_bitwise(
-    config: Path, tmp_path: Path, reference: dict[str, np.ndarray]
-) -> None:
+def test_sigkill_after_a_checkpoint_resumes_bitwise(long_config: Path, tmp_path: Path) -> None:
+    config = long_config
+    ref_out = tmp_path / "ref"
+    assert run(config, ref_out).returncode == 0
+    reference = arrays(ref_out)
     out = tmp_path / "out"
     proc = start(config, out)
     wait_for(out / "checkpoint.npz", proc)
@@ -92,9 +106,9 @@ def test_sigkill_after_a_checkpoint_resumes_bitwise(
     assert proc.returncode == -signal.SIGKILL
     with np.load(out / "checkpoint.npz") as z:
         completed = int(z["completed"])
-    assert 0 < completed < STEPS + 1
+    assert 0 < completed < KILL_STEPS + 1
     with h5py.File(out / "result.h5", "r") as f:  # readable after the kill
-        assert f["wear"].shape[0] == STEPS + 1
+        assert f["wear"].shape[0] == KILL_STEPS + 1
     marker = json.loads((out / ".vemwear").read_text())
     assert marker["state"] == "running"  # nobody told it otherwise: it was killed
     resumed = run(config, out, "--resume")
