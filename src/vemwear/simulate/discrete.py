@@ -138,7 +138,6 @@ class Discretization:
         self._resultants: _Resultants | None = None
         self._sliding_at: _Sliding | None = None
         self._K_cc = sp.csr_matrix((0, 0))
-        self._Fc0: NDArray | None = None
 
     def _contact_offset(self, cdofs: NDArray[np.int64]) -> NDArray[np.float64]:
         """``nu_a . u_c`` at the contact nodes from their prescribed components, which
@@ -302,7 +301,7 @@ class Discretization:
         ):  # reactions: Z^T F and the static part, once per load
             if op.b is None or step.F is not op.b_F or not self._constant_load:
                 con = self.constraints
-                static = -self._F_ext_c(step.t)
+                static = -self._external_load(step.t)[con.dofs]
                 if not con.zero:  # K_cc u_c of the prescribed values
                     static = static + np.asarray(self._K_cc @ con.values(step.t))
                 b = np.zeros(len(out))
@@ -356,15 +355,6 @@ class Discretization:
             op.A, op.ZT, op.ET = np.vstack([A, A_r]), ZT, ET
         self._resultants = op
         return op
-
-    def _F_ext_c(self, t: float) -> NDArray[np.float64]:
-        """The external load on the constrained dofs at time t."""
-        if self._Fc0 is not None:
-            return self._Fc0
-        F = self._external_load(t)[self.constraints.dofs]
-        if self._constant_load:
-            self._Fc0 = F
-        return F
 
     def _external_load(self, t: float) -> NDArray[np.float64]:
         """``f_h(t)`` on all dofs (body force and tractions), assembled once for a
