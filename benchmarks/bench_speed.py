@@ -282,6 +282,9 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
     print(f"machine: {os.cpu_count()} cores; python {sys.version.split()[0]}")
+    from vemwear.util.heap import keep_freed_memory
+
+    keep_freed_memory()  # in-process runs as in the command line's process
     if args.reference:
         reference_table(args.n, args.backends, args.repeat)
     if args.steps:

@@ -17,6 +17,13 @@ allocations), of:
   ``--n`` with the default backend (factorization, steps, recovery at every level);
   also with MKL's pool (PARDISO's threads) at one thread.
 
+These run with freed memory kept by the allocator, as in the command line
+(:func:`vemwear.util.heap.keep_freed_memory`). Then ``condensed run`` again in child
+processes, alternately with the allocator's freed memory kept and returned to the
+system (glibc's default): one untimed run and ``--runs`` timed runs each, with the
+page faults and the kernel time of each run. Last, the floor of the spread: a fixed
+single-threaded NumPy workload of about the same duration, interleaved with the runs.
+
 Usage::
 
     python benchmarks/bench_threads.py --repeat 7 --n 64
@@ -25,9 +32,14 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import resource
 import statistics
+import subprocess
+import sys
 import time
+from typing import Any
 
 
 def _row(name: str, v: list[float], unit: str) -> str:
@@ -39,6 +51,42 @@ def _row(name: str, v: list[float], unit: str) -> str:
     )
 
 
+def _heap_child(n: int, runs: int, kept: bool) -> None:
+    """Print, for ``runs`` condensed runs: the wall time, kernel time and page faults of
+    the run, and the wall time of its floor (the factorization with the Schur block of
+    the same stiffness, by the same backend), measured right after it."""
+    from vemwear.paper import ex52
+    from vemwear.simulate import SolverOptions, simulate
+    from vemwear.solvers.backends import schur_factorize
+    from vemwear.util.heap import keep_freed_memory
+
+    if kept:
+        keep_freed_memory()
+    pr = ex52.problem(0.2, 2.0, divisions=(2 * n, n), steps=n)
+    s = pr.discrete.system
+    simulate(pr, SolverOptions("newton"))
+    rows = []
+    for _ in range(runs):
+        r0, t0 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
+        simulate(pr, SolverOptions("newton"))
+        t, r1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_SELF)
+        t1 = time.perf_counter()
+        schur_factorize(s.K, s.contact_dofs.ravel(), s.dof_points, "auto")
+        floor = time.perf_counter() - t1
+        rows.append((t, r1.ru_stime - r0.ru_stime, r1.ru_minflt - r0.ru_minflt, floor))
+    print(json.dumps(rows))
+
+
+def _floor_work(x: Any, reps: int) -> float:
+    """A fixed NumPy workload (copies and sorts of ``x``); its wall time."""
+    import numpy as np
+
+    t = time.perf_counter()
+    for _ in range(reps):
+        np.sort(x * 1.0001)
+    return time.perf_counter() - t
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -47,7 +95,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--n", type=int, default=64, help="1/h of the matrices and of the run")
     ap.add_argument("--rhs", type=int, default=32)
     ap.add_argument("--dense", type=int, default=300)
+    ap.add_argument("--runs", type=int, default=3, help="timed runs per child process")
+    ap.add_argument("--heap-child", choices=["kept", "returned"], help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
+    if a.heap_child:
+        _heap_child(a.n, a.runs, a.heap_child == "kept")
+        return 0
 
     import numpy as np
 
@@ -56,6 +109,9 @@ def main(argv: list[str] | None = None) -> int:
     from vemwear.solvers.backends import compliance_from_schur
     from vemwear.solvers.backends.superlu import SuperLUSchur
     from vemwear.solvers.threads import blas_info
+    from vemwear.util.heap import keep_freed_memory
+
+    keep_freed_memory()  # as the command line does
 
     pr = ex52.problem(0.2, 2.0, divisions=(2 * a.n, a.n), steps=a.n)
     s = pr.discrete.system
@@ -118,7 +174,46 @@ def main(argv: list[str] | None = None) -> int:
                 print(_row(f"{name} ({mode})", times[(name, mode)], unit))
     libs = ", ".join(f"{d['internal_api']}:{d['num_threads']}" for d in blas_info())
     print(f"BLAS pools: {libs}")
+    _heap_table(a, statistics.median(times[("condensed run", "controlled")]))
     return 0
+
+
+def _heap_table(a: argparse.Namespace, run_time: float) -> None:
+    """Condensed runs in child processes with the allocator's freed memory kept or
+    returned, each with its floor, interleaved with a fixed NumPy workload of about the
+    same duration on one thread."""
+    import numpy as np
+    from threadpoolctl import threadpool_limits
+
+    x = np.random.default_rng(0).normal(size=200_000)
+    with threadpool_limits(limits=1):
+        once = _floor_work(x, 10) / 10
+    reps = max(1, round(run_time / once))
+    rows: dict[str, list[tuple[float, ...]]] = {"kept": [], "returned": []}
+    sorts: list[float] = []
+    for _ in range(a.repeat):
+        for mode in rows:
+            cmd = [sys.executable, __file__, "--heap-child", mode, "--n", str(a.n)]
+            out = subprocess.run(
+                [*cmd, "--runs", str(a.runs)], capture_output=True, text=True, check=True
+            )
+            rows[mode] += [tuple(r) for r in json.loads(out.stdout.splitlines()[-1])]
+            with threadpool_limits(limits=1):
+                sorts += [_floor_work(x, reps) for _ in range(a.runs)]
+    print(
+        f"condensed run in child processes ({a.repeat} x {a.runs} runs each, interleaved); "
+        "kernel time and page faults: medians per run; floor: the factorization with "
+        "the Schur block of the same matrix, right after each run"
+    )
+    for mode, v in rows.items():
+        sys_t, faults = statistics.median(r[1] for r in v), statistics.median(r[2] for r in v)
+        print(
+            _row(f"condensed run (freed memory {mode})", [r[0] for r in v], "s")
+            + f"  kernel {sys_t:.3f} s, {faults:.0f} page faults"
+        )
+        print(_row(f"  its floor (freed memory {mode})", [r[3] for r in v], "s"))
+        print(_row(f"  run / floor (freed memory {mode})", [r[0] / r[3] for r in v], ""))
+    print(_row("NumPy sorts, one thread", sorts, "s"))
 
 
 if __name__ == "__main__":

@@ -678,6 +678,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return code if isinstance(code, int) else (EXIT_OK if code is None else EXIT_INPUT)
     debug = bool(getattr(args, "debug", False))
     func: Callable[[argparse.Namespace], int] = args.func
+    from ..util.heap import keep_freed_memory
+
+    keep_freed_memory()  # steady run times: no page faults for every new array
     try:
         from ..runner.signals import signals_as_interrupts
 

@@ -181,7 +181,8 @@ def _worker_plugin() -> Any:
 
 
 def prepare_worker() -> None:
-    """Limit the BLAS pools of this process to one thread; import what a run needs; keep
+    """Limit the BLAS pools of this process to one thread; keep freed memory in the
+    allocator (:func:`vemwear.util.heap.keep_freed_memory`); import what a run needs; keep
     the last factorization of the stiffness, so that runs that change only contact data,
     loads or the time grid (the usual sweep axes) reuse it
     (:func:`vemwear.solvers.backends.keep_factorizations`). The limit holds for the
@@ -192,7 +193,9 @@ def prepare_worker() -> None:
     from threadpoolctl import threadpool_limits
 
     from ..solvers.backends import keep_factorizations, resolve_backend
+    from ..util.heap import keep_freed_memory
 
+    keep_freed_memory()
     keep_factorizations(1)
     resolve_backend("auto")  # loads MKL where PARDISO is installed, so that it is limited too
 

@@ -1,1 +1,2 @@
-"""Small helpers with no numerics: hashing of inputs (and, later, atomic files)."""
+"""Small helpers with no numerics: hashing of inputs, atomic files, what the machine
+offers, and the allocator's reuse of freed memory."""
