@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vemwear.mesh import Mesh, MeshError, check_mesh, rectangle_squares
+from vemwear.mesh import Mesh, MeshError, check_mesh, rectangle_squares, rectangle_triangles
 
 LEFT_CLAMPED = {"clamped": lambda x: x[:, 0] < 1e-9, "traction": "rest"}
 
@@ -34,3 +34,34 @@ def test_duplicate_vertices_are_named_in_pairs():
     dup = Mesh.from_cells(pts, [*cells, np.array([0, 1, 2])])
     with pytest.raises(MeshError, match=r"pairs \[\[0, 4\]\]"):
         check_mesh(dup.with_boundary(LEFT_CLAMPED))
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: rectangle_squares((2, 1), (32, 16)),
+        lambda: rectangle_squares((1e-3, 7.0), (5, 300), origin=(-4.0, 1e6)),
+        lambda: rectangle_triangles((2, 1), (32, 16)),
+        lambda: rectangle_triangles((2, 1), (7, 3), diagonal="left"),
+        lambda: rectangle_triangles((1, 50), (9, 400), diagonal="alternate"),
+    ],
+)
+def test_generated_grids_are_valid_and_recorded_so(make):
+    """The structured grids skip the geometry checks as valid by construction: the
+    checks run directly must agree, for various sizes, aspect ratios and diagonals."""
+    from vemwear.mesh import checks
+
+    mesh = make()
+    assert checks._geometry_digest(mesh) in checks._PASSED
+    checks.check_vertices(mesh)
+    checks.check_cells(mesh)
+    checks.check_conforming(mesh)
+
+
+def test_a_grid_that_rounding_collapses_is_still_checked():
+    from vemwear.mesh import checks
+
+    mesh = rectangle_triangles((1e-320, 1.0), (8, 4))
+    assert checks._geometry_digest(mesh) not in checks._PASSED
+    with pytest.raises(MeshError, match="duplicate vertices"):
+        check_mesh(mesh.with_boundary(LEFT_CLAMPED))

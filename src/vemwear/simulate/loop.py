@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..solvers import StepSolution
+from ..util.heap import keep_freed_memory
 from .levels import RESIDUAL_NAMES, run_levels
 from .options import SolverOptions
 from .problem import Problem
@@ -163,6 +164,10 @@ def simulate(
     (levels). The result is kept in memory; the command line streams long runs to disk
     instead (:func:`vemwear.simulate.levels.run_levels` with a file sink).
 
+    On Linux with glibc, the first call makes the allocator keep freed memory for the
+    next arrays, process-wide (:func:`vemwear.util.heap.keep_freed_memory`): new
+    arrays then reuse pages instead of page-faulting fresh ones.
+
     Parameters
     ----------
     problem : Problem
@@ -203,6 +208,7 @@ def simulate(
         levels finished so far as ``exc.partial_result`` (a :class:`Result` with
         ``completed`` set) before it propagates.
     """
+    keep_freed_memory()  # as the command line does: arrays reuse freed memory
     opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
     L = len(problem.time.t)
     if isinstance(store, str):
