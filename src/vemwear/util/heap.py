@@ -7,15 +7,15 @@ threshold (128 KiB at first) to the kernel at once and trims the top of its heap
 beyond 128 KiB of free memory, so each new array page-faults again; NumPy also asks
 for transparent huge pages on large arrays, and where the kernel compacts memory to
 find them (``defrag = madvise``) a fault can stall for milliseconds. On the 2-core
-machine a 66,000-unknown run made 19,000 page faults and, in one repeat out of five,
-spent 0.1 s more in the kernel (``benchmarks/bench_threads.py``).
+machine a 66,000-unknown run made 19,900 page faults and spent 0.037 s in the kernel,
+against 359 and 0.004 s with freed memory kept (``benchmarks/bench_threads.py``).
 
 :func:`keep_freed_memory` raises both thresholds (``mallopt``): blocks up to 32 MiB
 come from the heap and go back to it, and up to 128 MiB of free heap is kept. Blocks
 above 32 MiB (the big arrays of big runs) are still mapped and unmapped, so the peak
 memory of a big run does not grow. The setting is process-wide: the command line and
-the study workers make it at start; a program that runs many simulations in one
-process may call it once.
+the study workers make it at start, :func:`vemwear.simulate.simulate` at its first
+call.
 """
 
 from __future__ import annotations
