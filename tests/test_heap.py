@@ -18,8 +18,10 @@ pytestmark = pytest.mark.skipif(
 # 20 times 40 arrays of 1 MiB (256 pages each) written, held and freed together, after
 # one untimed round: the 40 MiB freed at the top of the heap are trimmed by default
 _CHILD = r"""
-import json, resource, sys
+import ctypes, json, resource, sys
 import numpy as np
+# pages of 4 KiB, whatever the machine's transparent huge pages: a fault per page
+ctypes.CDLL(None).prctl(41, 1, 0, 0, 0)  # PR_SET_THP_DISABLE
 from vemwear.util.heap import keep_freed_memory
 made = keep_freed_memory() if sys.argv[1] == "kept" else False
 def round_():

@@ -13,7 +13,8 @@ from __future__ import annotations
 import dataclasses
 import functools
 import warnings
-from typing import TYPE_CHECKING, Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import scipy.sparse as sp
@@ -296,9 +297,8 @@ class Discretization:
         np.multiply(step.fric, solution.p_soft, out=x[m:])
         x[m:] *= w
         out = op.A @ x
-        if (
-            op.ZT is not None and op.ET is not None
-        ):  # reactions: Z^T F and the static part, once per load
+        if op.ZT is not None and op.ET is not None:
+            # the reactions' part that the layer forces leave: once per load vector
             if op.b is None or step.F is not op.b_F or not self._constant_load:
                 con = self.constraints
                 static = -self._external_load(step.t)[con.dofs]
@@ -387,16 +387,15 @@ class Discretization:
     def full_dofs(self, u_free: NDArray[np.float64], t: float | None = None) -> NDArray:
         """All dofs of the displacement: ``u_free`` on the free dofs, the prescribed
         values at time ``t`` on the others (zero on clamped parts)."""
-        u = np.zeros(self.n_dof)
-        u[self.free] = u_free
-        if not self.constraints.zero:
-            if t is None:
-                raise ValueError("full_displacement: the time is needed for prescribed values")
-            u[self.constraints.dofs] = self.constraints.values(t)
-        return u
+        if t is None and not self.constraints.zero:
+            raise ValueError("full_displacement: the time is needed for prescribed values")
+        return self.full_dofs_block(np.asarray(u_free)[:, None], [t])[0]
 
     def full_dofs_block(
-        self, X: NDArray[np.float64], times: list[float], out: NDArray[np.float64] | None = None
+        self,
+        X: NDArray[np.float64],
+        times: Sequence[float | None],
+        out: NDArray[np.float64] | None = None,
     ) -> NDArray:
         """:meth:`full_dofs` of the columns of ``X`` (n_free, k) at their ``times``, as
         the rows of a (k, n_dofs) array (``out`` when given): one pass for a block."""
@@ -407,7 +406,7 @@ class Discretization:
             U[:, con.dofs] = 0.0
         else:
             for j, t in enumerate(times):
-                U[j, con.dofs] = con.values(t)
+                U[j, con.dofs] = con.values(cast(float, t))
         return U
 
     def full_displacement(

@@ -146,7 +146,8 @@ class CondensedNewton:
         self._x = np.zeros(2 * m)  # work arrays of the iteration, and views of their halves
         self._x_n, self._x_t = self._x[:m], self._x[m:]
         self._buf = np.zeros(2 * m)
-        self._zeros = np.zeros(m)  # read only
+        self._zeros = np.zeros(m)
+        self._zeros.setflags(write=False)
         self._wf: tuple[NDArray | None, NDArray] = (None, w)  # (fric, weights * fric)
         self._inv_g_ref = 1.0 / max(float(np.abs(system.g).max()), _TINY)
         self._reduced: _ReducedMatrix | None = None
