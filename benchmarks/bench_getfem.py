@@ -44,7 +44,11 @@ time of the child process seen from here. The sizes run interleaved ``--repeat``
 times; the table gives min / median / max, the ratio of the medians
 (GetFEM / vemwear), the Newton iterations of all levels, and the agreement of the
 wear at T: the relative difference of the maximal wear and the largest nodal
-difference over the maximal wear (largest over the repeats).
+difference over the maximal wear (largest over the repeats). **Floor** is measured in
+vemwear's child right after its timed run, on the same problem: the assembly of K, the
+factorization with the Schur block on the contact dofs and one block solve with a
+column per level (the linear algebra the run cannot do without); the table gives its
+median and vemwear's median compute time over it.
 
 Threads: neither side is told anything by default (GetFEM's build has no OpenMP;
 MUMPS calls OpenBLAS, vemwear's default backend is PARDISO with MKL's threads where
@@ -180,7 +184,7 @@ import numpy as np
 from vemwear.contact import LinearCompliance
 from vemwear.mesh import rectangle_triangles, tag_rectangle
 from vemwear.simulate import Problem, SolverOptions, TimeGrid, simulate
-from vemwear.solvers.backends import resolve_backend
+from vemwear.solvers.backends import resolve_backend, schur_factorize
 from vemwear.vem import Material
 
 # modules that vemwear imports on first use: imports are not compute time
@@ -203,13 +207,26 @@ def solve(nx, ny, steps):
         kappa=a["kappa"], v_star=tuple(a["v_star"]),
     )
     r = simulate(pr, SolverOptions("newton", backend=a["backend"]))
-    return time.perf_counter() - t0, mesh, r
+    return time.perf_counter() - t0, pr, r
+
+
+# the run's linear algebra alone, on its matrix: assembly of K, factorization with the
+# Schur block on the contact dofs, and one block solve of a column per level
+def floor(pr, levels):
+    t0 = time.perf_counter()
+    pr.space.stiffness(pr.material, pr.stabilization)
+    s = pr.discrete.system
+    f = schur_factorize(s.K, s.contact_dofs.ravel(), s.dof_points, a["backend"])
+    f.solve(np.ones((s.n_free, levels), order="F"))
+    return time.perf_counter() - t0
 
 
 solve(4, 2, 2)  # first-call set-up of the libraries is not compute time
-compute, mesh, r = solve(a["nx"], a["ny"], a["steps"])
+compute, pr, r = solve(a["nx"], a["ny"], a["steps"])
+mesh = pr.mesh
 np.savez(a["out"], x=r.contact_points[:, 0], w=r.wear[-1])
-print(json.dumps({"compute": compute, "iterations": int(r.iterations.sum()),
+print(json.dumps({"compute": compute, "floor": floor(pr, len(r.t)),
+                  "iterations": int(r.iterations.sum()),
                   "dofs": 2 * len(mesh.points), "levels": len(r.t),
                   "backend": resolve_backend(a["backend"])}))
 """
@@ -339,7 +356,7 @@ def main(argv: list[str] | None = None) -> int:
         f"Example 5.2 set 1 on triangles, {args.steps} steps ({args.steps + 1} levels), "
         f"interleaved x {args.repeat}"
     )
-    cols = ("gf", "vem", "gf_whole", "vem_whole")
+    cols = ("gf", "vem", "gf_whole", "vem_whole", "floor")
     with tempfile.TemporaryDirectory() as tmp:
         child = os.path.join(tmp, "getfem_child.py")
         with open(child, "w") as fh:
@@ -370,7 +387,9 @@ def main(argv: list[str] | None = None) -> int:
                     "out": vem_out,
                 }
                 v, v_wall = _run([sys.executable, "-c", _VEMWEAR_CHILD, json.dumps(spec)], env)
-                for c, val in zip(cols, (g["compute"], v["compute"], g_wall, v_wall), strict=True):
+                for c, val in zip(
+                    cols, (g["compute"], v["compute"], g_wall, v_wall, v["floor"]), strict=True
+                ):
                     times[n][c].append(val)
                 wmax, rel_max, rel_nodal = _agreement(vem_out, gf_out)
                 if g["dofs"] != v["dofs"]:
@@ -380,10 +399,13 @@ def main(argv: list[str] | None = None) -> int:
                 it.update(its=f"{g['iterations']}/{v['iterations']}")
                 it["rel_max"] = max(it["rel_max"], rel_max)
                 it["rel_nodal"] = max(it["rel_nodal"], rel_nodal)
-    print("seconds: min med max; ratio = GetFEM median / vemwear median")
+    print(
+        "seconds: min med max; ratio = GetFEM median / vemwear median; floor: vemwear's "
+        "median over the median of its floor"
+    )
     head = (
         f"{'size':>8} {'dofs':>7} {'lev':>4} | {'GetFEM compute':>23} | {'vemwear compute':>23} |"
-        f" {'ratio':>6} | {'GetFEM whole':>23} | {'vemwear whole':>23} | {'ratio':>6} |"
+        f" {'ratio':>6} | {'floor':>7} {'x':>5} | {'GetFEM whole':>23} | {'vemwear whole':>23} | {'ratio':>6} |"
         f" {'Newton G/V':>10} | {'max wear':>9} {'dmax':>8} {'dnodal':>8}"
     )
     print(head)
@@ -394,7 +416,9 @@ def main(argv: list[str] | None = None) -> int:
         ratio_w = statistics.median(t["gf_whole"]) / statistics.median(t["vem_whole"])
         print(
             f"{f'{n}x{n // 2}':>8} {it['dofs']:>7} {it['levels']:>4} | {_stats(t['gf']):>23} |"
-            f" {_stats(t['vem']):>23} | {ratio:6.1f} | {_stats(t['gf_whole']):>23} |"
+            f" {_stats(t['vem']):>23} | {ratio:6.1f} | {statistics.median(t['floor']):7.4f}"
+            f" {statistics.median(t['vem']) / statistics.median(t['floor']):5.2f} |"
+            f" {_stats(t['gf_whole']):>23} |"
             f" {_stats(t['vem_whole']):>23} | {ratio_w:6.1f} | {it['its']:>10} |"
             f" {it['wmax']:9.6f} {it['rel_max']:8.1e} {it['rel_nodal']:8.1e}"
         )
