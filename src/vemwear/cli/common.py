@@ -1,6 +1,8 @@
-"""What every ``vemwear`` subcommand shares: exit codes, the help layout, printing rows.
+"""What every ``vemwear`` subcommand shares: exit codes, the help layout, the options of
+the solving commands, printing rows.
 
-Nothing here imports NumPy or the library: ``vemwear --help`` and ``--version`` stay fast.
+Nothing here imports NumPy or the library when the module is imported: ``vemwear --help``
+and ``--version`` stay fast.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ __all__ = [
     "EXIT_OK",
     "PROG",
     "UsageError",
+    "add_common_options",
     "add_debug_option",
     "add_subcommand",
     "positive_int",
@@ -86,6 +89,46 @@ def top_parser(description: str) -> argparse.ArgumentParser:
 
 def add_debug_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--debug", action="store_true", help="print the full traceback on errors")
+
+
+def _solver_methods() -> tuple[str, ...]:
+    from ..solvers import SOLVERS
+
+    return tuple(SOLVERS)
+
+
+def add_common_options(
+    p: argparse.ArgumentParser, *, solve: bool, outdir_required: bool = True
+) -> None:
+    """The options of the commands that solve (``solve``: OUTDIR, ``--force``, ``--solver``,
+    ``--no-progress``) and ``--debug``; the solver methods are imported only here."""
+    if solve:
+        methods = _solver_methods()
+        p.add_argument(
+            "-o",
+            "--outdir",
+            required=outdir_required,
+            metavar="OUTDIR",
+            help="output directory: new, empty, or one vemwear wrote (with --force)",
+        )
+        p.add_argument(
+            "--force",
+            action="store_true",
+            help="replace the output of an earlier vemwear run in OUTDIR (only the files "
+            "vemwear wrote there; a directory vemwear did not write is never replaced)",
+        )
+        p.add_argument(
+            "--solver",
+            choices=methods,
+            metavar="METHOD",
+            help="step solver, overriding the configuration: " + " | ".join(methods),
+        )
+        p.add_argument(
+            "--no-progress",
+            action="store_true",
+            help="do not show the progress bar of the time loop",
+        )
+    add_debug_option(p)
 
 
 def positive_int(text: str) -> int:
