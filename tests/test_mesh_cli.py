@@ -436,7 +436,7 @@ def test_hanging_and_contact_nodes() -> None:
 def test_config_and_cli_share_the_registry(tmp_path: Path) -> None:
     """Every family and alias of the registry works in a config and gives the command's mesh."""
     from vemwear.config import parse_config
-    from vemwear.config.schema import MESH_FORMS
+    from vemwear.config.mesh_forms import MESH_FORMS
     from vemwear.mesh.registry3d import FAMILIES_3D
 
     assert set(MESH_FORMS) == {*FAMILIES, *FAMILIES_3D, "file"}

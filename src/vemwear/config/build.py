@@ -4,8 +4,11 @@ Every value is checked once, by the library object it becomes (``Material``, the
 compliance laws, ``TimeGrid``, ``SolverOptions``, the mesh generators and reader,
 ``Problem``); each is built inside :func:`~vemwear.config.errors.at`, which turns
 its ``ValueError`` into a :class:`ConfigError` naming the key. What no library object
-checks is checked here: the boundary selectors (each selects an edge, no edge in two
-parts), loads given by expressions being finite, and ``[output] times`` on the grid.
+checks is checked here (the boundary selectors: each selects an edge, no edge in two
+parts; ``[output] times`` on the grid) or, on the mesh and the problem built, by
+:mod:`vemwear.config.checks` (vectors with as many components as the mesh has
+dimensions, loads and velocities given by expressions finite). Values written as
+expressions become the callables of :mod:`vemwear.config.fields`.
 
 One job, the path from a file to the library objects, in 2D and 3D; its length is the
 one place each section becomes its object and each error gets its key path.
@@ -17,7 +20,7 @@ import copy
 import functools
 import os
 import tomllib
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -25,7 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..contact import arc_length, table_values, velocity_levels
+from ..contact import arc_length
 from ..mesh import Mesh, MeshError, read_mesh, select_parts
 from ..mesh.boundary3d import select_parts3d
 from ..mesh.io3d import mesh_file_dim, read_mesh3d
@@ -33,10 +36,12 @@ from ..mesh.polyhedra import Mesh3D
 from ..simulate import Problem, SolverOptions, TimeGrid
 from ..simulate.cycles import CycleJump
 from ..solvers import resolve_backend
-from ..vem import Material, body_force_vector, edge_load_vector
+from ..vem import Material
 from . import schema as s
+from .checks import check_dims, check_loads, check_velocity
 from .errors import ConfigError, at, from_library, from_validation
-from .expr import Expression
+from .fields import FieldExpression, VelocityExpression, library_data
+from .mesh_forms import MeshFile, mesh_family
 from .parts import Roles, contact_law, contact_parts, roles
 
 __all__ = ["Config", "OutputOptions", "Sizes", "load_config", "parse_config"]
@@ -136,8 +141,8 @@ def _sizes(src: str, c: s.ConfigFile) -> Sizes:
         L = len(t.dt) + 1
     m = c.mesh
     cells, dim = 0, 2
-    if not isinstance(m, s.MeshFile):
-        fam = s.mesh_family(m.generator)
+    if not isinstance(m, MeshFile):
+        fam = mesh_family(m.generator)
         cells = fam.estimate_cells(m.model_dump(exclude_unset=True))
         dim = fam.dim
     store, out = c.output.store_u, c.output
@@ -150,97 +155,11 @@ def _sizes(src: str, c: s.ConfigFile) -> Sizes:
     return Sizes(src, L, int(cells), kept, min(stored, L), out.vtk, dim)
 
 
-# ---------------------------------------------------------------------------- expressions
-class NodalExpression:
-    """``g``, ``mu`` or ``kappa`` as an expression in ``x, y, z``, called with the (m, 2)
-    or (m, 3) contact nodes (``z = 0`` in 2D); ``__name__`` is its text."""
-
-    def __init__(self, expr: Expression) -> None:
-        self.expr, self.__name__ = expr, expr.text
-
-    def __call__(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
-        P = np.asarray(points, dtype=float)
-        if "z" not in self.expr.names:
-            return self.expr(x=P[..., 0], y=P[..., 1])
-        z = P[..., 2] if P.shape[-1] == 3 else np.zeros(P.shape[:-1])
-        return self.expr(x=P[..., 0], y=P[..., 1], z=z)
-
-
-class FieldExpression:
-    """A load of numbers, expressions in ``x, y, z, t`` and (a traction) tables
-    ``{along, at, values}``: ``f(points, t)`` -> (m, d), d = 2 or 3 its components
-    (``z = 0`` in 2D).
-
-    ``arc(points)`` gives the arc length along the load's boundary part (tables along
-    ``s``)."""
-
-    def __init__(
-        self,
-        parts: Sequence[Expression | float | s.Section],
-        text: str,
-        arc: Callable[[NDArray[np.float64]], NDArray[np.float64]] | None = None,
-    ) -> None:
-        self.parts = tuple(c.model_dump() if isinstance(c, s.Section) else c for c in parts)
-        self.__name__, self.arc = text, arc
-        self.uses_t = any(isinstance(c, Expression) and "t" in c.names for c in self.parts)
-
-    def __call__(self, x: NDArray[np.float64], t: float) -> NDArray[np.float64]:
-        X = np.asarray(x, dtype=float)
-        P = X.reshape(-1, 3 if X.ndim == 2 and X.shape[1] == 3 else 2)
-        env = {"x": P[:, 0], "y": P[:, 1], "t": np.full(len(P), float(t))}
-        if any(isinstance(c, Expression) and "z" in c.names for c in self.parts):
-            env["z"] = P[:, 2] if P.shape[1] == 3 else np.zeros(len(P))
-        cols = []
-        for i, c in enumerate(self.parts):
-            if isinstance(c, dict):
-                cols.append(table_values(c, P, functools.partial(self._arc, P), f"f2[{i}]"))
-            else:
-                cols.append(_value(c, env))
-        return np.column_stack(cols)
-
-    def _arc(self, P: NDArray[np.float64]) -> NDArray[np.float64]:
-        if self.arc is None:
-            raise ValueError("f2: a table along s needs a boundary part")
-        return self.arc(P)
-
-
-class VelocityExpression:
-    """``v_star`` of numbers and expressions in ``t``: ``v(t)`` -> 2-vector."""
-
-    def __init__(self, parts: Sequence[Expression | float], text: str) -> None:
-        self.parts, self.__name__ = tuple(parts), text
-
-    def __call__(self, t: float) -> NDArray[np.float64]:
-        return np.array([float(_value(c, {"t": np.array([float(t)])})[0]) for c in self.parts])
-
-    def at_times(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``v(t)`` at many times at once: (len(t), 2)."""
-        ts = np.asarray(t, dtype=float).ravel()
-        return np.column_stack(
-            [np.broadcast_to(_value(c, {"t": ts}), ts.shape) for c in self.parts]
-        )
-
-
-def _value(c: Expression | float, env: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
-    return c(**env) if isinstance(c, Expression) else np.full(len(env["t"]), float(c))
-
-
-def _data(v: Any, cls: type | None, raw: Any) -> Any:
-    """A number, table (as a dict) or expression of the schema as the library takes it."""
-    if isinstance(v, Expression):
-        return NodalExpression(v)
-    if isinstance(v, s.Section):
-        return v.model_dump(by_alias=True)
-    if cls and isinstance(v, list) and any(isinstance(c, Expression | s.Section) for c in v):
-        return cls(v, "[" + ", ".join(repr(c) for c in raw) + "]")
-    return tuple(v) if isinstance(v, list) else v
-
-
-# ---------------------------------------------------------------------------- mesh, boundary
+# ---------------------------------------------------------------------------- mesh
 def _mesh(
     src: str, m: Any, raw: Mapping[str, Any], base_dir: Path
 ) -> tuple[Mesh | Mesh3D, dict[str, Any]]:
-    if isinstance(m, s.MeshFile):
+    if isinstance(m, MeshFile):
         path = Path(m.file).expanduser()
         path = path if path.is_absolute() else base_dir / path
         if not path.is_file():
@@ -253,7 +172,7 @@ def _mesh(
         except MeshError as exc:
             msg = str(exc).removeprefix(f"{path}: ")
             raise ConfigError(f"{src}: [mesh] file {m.file!r}: {msg}") from None
-    fam = s.mesh_family(m.generator)
+    fam = mesh_family(m.generator)
     options = m.model_dump(exclude_unset=True, exclude={"generator"})
     with at(src, "[mesh]", raw):
         try:
@@ -261,59 +180,6 @@ def _mesh(
         except TypeError as exc:  # options that do not go together (e.g. seeds and Lloyd)
             raise ValueError(f"generator {m.generator!r}: {exc}") from None
     return mesh, {"generator": m.generator, "function": fam.function.__name__, **options}
-
-
-def _pt(p: NDArray[np.float64]) -> str:
-    return "(" + ", ".join(f"{v:.6g}" for v in p) + ")"
-
-
-def _check_dims(src: str, c: s.ConfigFile, raw: Mapping[str, Any], dim: int) -> None:
-    """The vectors of the file have ``dim`` components (2 on a 2D mesh, 3 on a 3D one)
-    and ``uz`` is given on 3D meshes only."""
-    names = {2: "[x, y]", 3: "[x, y, z]"}
-    what = f"a {dim}D mesh"
-    if not isinstance(c.mesh, s.MeshFile):
-        what += f" ({c.mesh.generator!r})"
-
-    def need(path: str, v: Any) -> None:
-        if isinstance(v, list) and len(v) != dim:
-            raise ConfigError(
-                f"{src}: {path} = {show_raw(v)} has {len(v)} components; {what} needs {dim} "
-                f"{names[dim]}"
-            )
-
-    loads = raw.get("loads", {})
-    for key in ("f1", "f2"):
-        if key in loads:
-            need(f"[loads] {key}", loads[key])
-    b = raw.get("boundary")
-    if isinstance(b, dict):
-        tr = b.get("traction")
-        if isinstance(tr, list):
-            for i, t in enumerate(tr):
-                if isinstance(t, dict):
-                    need(f"[[boundary.traction]] {i + 1} f2", t.get("f2"))
-        for i, d in enumerate(b.get("displacement") or []):
-            if dim == 2 and isinstance(d, dict) and "uz" in d:
-                raise ConfigError(
-                    f"{src}: [[boundary.displacement]] {i + 1}: uz is a component of 3D meshes; "
-                    f"{what} has ux and uy"
-                )
-    tables = raw["contact"] if isinstance(raw["contact"], list) else [raw["contact"]]
-    for i, t in enumerate(tables):
-        path = f"[[contact]] {i + 1}" if isinstance(raw["contact"], list) else "[contact]"
-        v = t.get("v_star")
-        if isinstance(v, dict):
-            for j, row in enumerate(v.get("values", [])):
-                need(f"{path} v_star.values[{j}]", row)
-        else:
-            need(f"{path} v_star", v)
-
-
-def show_raw(v: Any) -> str:
-    """A TOML array as written (short)."""
-    text = "[" + ", ".join(repr(x) if isinstance(x, str) else f"{x:g}" for x in v) + "]"
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 # ---------------------------------------------------------------------------- time, loads
@@ -390,9 +256,9 @@ def _problem(
 ) -> Problem:
     """The :class:`Problem` of the roles; its errors at their keys."""
     loads = raw.get("loads", {})
-    f2: Any = _data(c.loads.f2, FieldExpression, loads.get("f2"))
+    f2: Any = library_data(c.loads.f2, FieldExpression, loads.get("f2"))
     if parts.tractions:
-        f2 = {n: _data(v, FieldExpression, rv) for n, (v, rv) in parts.tractions.items()}
+        f2 = {n: library_data(v, FieldExpression, rv) for n, (v, rv) in parts.tractions.items()}
         for n, f in f2.items():
             if isinstance(f, FieldExpression):
                 f.arc = (
@@ -408,20 +274,20 @@ def _problem(
                 law = contact_law(ct.p)
             top = {
                 "p": law,
-                "g": _data(ct.g, None, None),
-                "mu": _data(ct.mu, None, None),
-                "kappa": _data(ct.kappa, None, None),
-                "v_star": _data(ct.v_star, VelocityExpression, rt["v_star"]),
-                "gap": _data(ct.gap, None, None),
+                "g": library_data(ct.g, None, None),
+                "mu": library_data(ct.mu, None, None),
+                "kappa": library_data(ct.kappa, None, None),
+                "v_star": library_data(ct.v_star, VelocityExpression, rt["v_star"]),
+                "gap": library_data(ct.gap, None, None),
             }
             contacts: tuple[Any, ...] = ()
         else:
-            top, contacts = {}, contact_parts(src, parts, _data, VelocityExpression)
+            top, contacts = {}, contact_parts(src, parts, library_data, VelocityExpression)
         return Problem(
             mesh=mesh,
             material=material,
             time=grid,
-            f1=_data(c.loads.f1, FieldExpression, loads.get("f1")),
+            f1=library_data(c.loads.f1, FieldExpression, loads.get("f1")),
             f2=f2,
             stabilization=c.vem.stabilization,
             order=c.vem.order,
@@ -446,66 +312,6 @@ def _problem(
 def _x_coordinate(P: NDArray[np.float64]) -> NDArray[np.float64]:
     """``s`` of a 3D mesh: the x coordinate (a surface has no arc length)."""
     return np.asarray(P[:, 0])
-
-
-def _check_velocity(src: str, pr: Problem, parts: Roles) -> None:
-    """``v_star`` is a finite 2-vector at every time level (an expression or a table of t
-    may overflow or divide by zero)."""
-    where = {name: path for name, _, _, path in parts.contacts}
-    t = pr.time.t
-    for pc in pr.parts:
-        with np.errstate(all="ignore"):
-            V = velocity_levels(pc.velocity, t)
-        bad = np.flatnonzero(~np.all(np.isfinite(V), axis=1))
-        if bad.size:
-            n = int(bad[0])
-            spec = pc.velocity.spec
-            text = f" = {spec.__name__}" if isinstance(spec, VelocityExpression) else ""
-            raise ConfigError(
-                f"{src}: {where.get(pc.part, '[contact]')} v_star{text} is not finite at t = "
-                f"{t[n]:g} (level {n}): v* = ({V[n, 0]:g}, {V[n, 1]:g})"
-            )
-
-
-def _check_loads(src: str, pr: Problem, parts: Roles) -> None:
-    """Loads given by expressions or tables give finite load vectors at every time level."""
-    fields: list[tuple[str, Any, NDArray[np.int64] | None]] = [("[loads] f1", pr.f1, None)]
-    three = isinstance(pr.mesh, Mesh3D)
-    fields += [
-        (
-            f"{parts.where[n]} f2" if n in parts.tractions else "[loads] f2",
-            f,
-            pr.mesh.part_faces(n) if isinstance(pr.mesh, Mesh3D) else pr.mesh.part_edges(n),
-        )
-        for n, f in pr.tractions.items()
-    ]
-    for name, f, edges in fields:
-        if not isinstance(f, FieldExpression):
-            continue
-        with np.errstate(all="ignore"):
-            for n in range(len(pr.time.t)) if f.uses_t else range(1):
-                t = float(pr.time.t[n])
-                try:
-                    if three:
-                        sp = pr.space
-                        F = sp.body_force(f, t) if edges is None else sp.boundary_load(edges, f, t)
-                        F = F.reshape(-1, 3)
-                    else:
-                        F = (
-                            body_force_vector(pr.mesh, f, t)
-                            if edges is None
-                            else edge_load_vector(pr.mesh, edges, f, t)
-                        ).reshape(-1, 2)
-                except ValueError as exc:  # a table
-                    raise ConfigError(f"{src}: {name}{str(exc).removeprefix('f2')}") from None
-                bad = np.flatnonzero(~np.all(np.isfinite(F), axis=1))
-                if bad.size:
-                    v = int(bad[0])
-                    when = f" at t = {pr.time.t[n]:g} (level {n})" if f.uses_t else ""
-                    raise ConfigError(
-                        f"{src}: {name} = {f.__name__} is not finite near vertex {v} "
-                        f"(x = {_pt(pr.mesh.points[v])}){when}"
-                    )
 
 
 # ---------------------------------------------------------------------------- entry points
@@ -607,7 +413,7 @@ def parse_config(
         resolve_backend(sol.backend)
 
     mesh, mesh_source = _mesh(src, c.mesh, raw["mesh"], Path(base_dir))
-    _check_dims(src, c, raw, 3 if isinstance(mesh, Mesh3D) else 2)
+    check_dims(src, c, raw, 3 if isinstance(mesh, Mesh3D) else 2)
     if parts.selectors:
         with at(src, "[boundary]", raw.get("boundary", {})):
             if isinstance(mesh, Mesh3D):
@@ -618,8 +424,8 @@ def parse_config(
     else:
         where = f"[mesh] file {c.mesh.file!r}:"
     problem = _problem(src, c, raw, parts, mesh, material, grid, where)
-    _check_velocity(src, problem, parts)
-    _check_loads(src, problem, parts)
+    check_velocity(src, problem, parts)
+    check_loads(src, problem, parts)
     title = c.title if c.title is not None else Path(source).stem
     cycles = None
     cj = c.time.cycle_jump

@@ -15,8 +15,9 @@ from typing import Any
 
 from pydantic import BaseModel
 
+from ..mesh.registry import FAMILIES
 from . import schema as s
-from .schema import FAMILIES
+from .mesh_forms import MESH_FORMS, MeshFile
 
 __all__ = ["config_json_schema", "reference_tables", "update_reference"]
 
@@ -84,7 +85,7 @@ def reference_tables() -> dict[str, str]:
     ]
     options = [
         [f"`{n}`", *r]
-        for n, m in s.MESH_FORMS.items()
+        for n, m in MESH_FORMS.items()
         if n != "file"
         for r in _rows(m, ("generator",))
     ]
@@ -101,7 +102,7 @@ def reference_tables() -> dict[str, str]:
     laws = [[f'`"{n}"`', *r] for n, m in s.LAWS.items() for r in _rows(m, ("type",))]
     tables = {
         "top": _table(head, _rows(s.ConfigFile)[:1]),
-        "mesh": _table(head, _rows(s.MeshFile)),
+        "mesh": _table(head, _rows(MeshFile)),
         "mesh.families": _table(["generator", "also called", "meshes"], fams),
         "mesh.options": _table(["generator", *head], options),
         "contact.p": _table(["type", *head], laws),

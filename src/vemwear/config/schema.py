@@ -4,145 +4,36 @@ The models declare what a file may hold: its sections and keys (an unknown one i
 error with a suggestion), their types (numbers finite, integers where required),
 defaults (those of the library objects), and the forms a key may take: the
 compliance law by its ``type``, ``[time]`` by which of ``steps``, ``dt``, ``pattern``,
-``levels`` it holds, ``[mesh]`` by its ``generator`` (the families and options of
-:mod:`vemwear.mesh.registry`) or ``file``, a coefficient as a number, an expression
-string (parsed here by :mod:`vemwear.config.expr`) or a table. The physics (signs,
-monotone laws, time grids) is checked by the library objects the values become
+``levels`` it holds, ``[mesh]`` by its ``generator`` or ``file``
+(:mod:`vemwear.config.mesh_forms`), a coefficient as a number, an expression string
+(parsed by :mod:`vemwear.config.expr`) or a table. The physics (signs, monotone laws,
+time grids) is checked by the library objects the values become
 (:mod:`vemwear.config.build`), not here. The field descriptions are the key reference
 of ``docs/config.md`` and of the JSON Schema that ``vemwear schema`` prints.
 
-One job, one module: every section's model is here so that the schema reads in one
-place; most of its length is the one-line description of each key.
+One job, one module: every section's model is here, down to :class:`ConfigFile` (the
+file), so that the schema reads in one place; most of its length is the one-line
+description of each key. The base model and the union and expression types the keys
+are declared with are in :mod:`vemwear.config.sections`, the ``[mesh]`` forms (built
+from the mesh registries) in :mod:`vemwear.config.mesh_forms`.
 """
 
-import dataclasses
 import difflib
-import types
-from collections.abc import Callable
-from typing import Annotated, Any, Literal, TypeAlias, Union, get_args, get_origin
+from typing import Annotated, Any, Literal, TypeAlias
 
-from pydantic import (
-    AfterValidator,
-    BaseModel,
-    ConfigDict,
-    Discriminator,
-    Field,
-    PlainValidator,
-    Tag,
-    create_model,
-    model_validator,
-)
-from pydantic.json_schema import SkipJsonSchema
+from pydantic import AfterValidator, ConfigDict, Field, model_validator
 
 from ..mesh.boundary import SIDES
-from ..mesh.registry import FAMILIES, Family, lookup
-from ..mesh.registry3d import FAMILIES_3D
 from ..simulate import Problem, SolverOptions
 from ..solvers import BACKENDS, SOLVERS
 from ..vem import STABILIZATIONS
 from .errors import error, got, show, suggest
-from .expr import ExpressionError, parse_expression
-
-
-def _default(cls: type, name: str) -> Any:
-    """The default of a field of a library dataclass (one place for each default)."""
-    return {f.name: f for f in dataclasses.fields(cls)}[name].default
-
-
-class Section(BaseModel):
-    """A TOML table: known keys only, strict types, finite numbers."""
-
-    model_config = ConfigDict(strict=True, extra="forbid", allow_inf_nan=False, frozen=True)
-
-    @model_validator(mode="before")
-    @classmethod
-    def _known_keys(cls, data: Any) -> Any:
-        if isinstance(data, dict):
-            names = [f.alias or n for n, f in cls.model_fields.items()]
-            for key in data:
-                if key not in names:
-                    raise error(cls._unknown(str(key), names, data))
-        return data
-
-    @classmethod
-    def _unknown(cls, key: str, names: list[str], data: dict[str, Any]) -> str:
-        return f"unknown key {key!r}{suggest(key, names)}"
-
-
-# ---------------------------------------------------------------------------- unions
-def choice(pick: Callable[[Any], str | None], explain: Callable[[Any], str], **forms: Any) -> Any:
-    """A union of ``forms``: ``pick(value)`` names the form to validate; None is the
-    error ``explain(value)``."""
-
-    def fail(value: Any) -> Any:
-        raise error(explain(value))
-
-    members = [Annotated[t, Tag(f"<{k}>")] for k, t in forms.items()]
-    members.append(Annotated[Any, PlainValidator(fail), SkipJsonSchema(), Tag("<error>")])
-    return Annotated[Union[tuple(members)], Discriminator(lambda v: f"<{pick(v) or 'error'}>")]  # noqa: UP007
-
-
-def _toml_kind(v: Any) -> str | None:
-    if isinstance(v, int | float) and not isinstance(v, bool):
-        return "number"
-    kinds: dict[type, str] = {str: "string", list: "array", dict: "table"}
-    return kinds.get(type(v))
-
-
-def by_kind(what: str, **forms: Any) -> Any:
-    """A union of forms ``number``, ``string``, ``array``, ``table`` picked by the TOML type."""
-    return choice(
-        lambda v: _toml_kind(v) if _toml_kind(v) in forms else None,
-        lambda v: f"must be {what}, {got(v)}",
-        **forms,
-    )
-
-
-def expression(*names: str) -> Any:
-    """An expression string in the variables ``names``, parsed into an ``Expression``."""
-
-    def parse(text: str) -> Any:
-        try:
-            return parse_expression(text, names, where="")
-        except ExpressionError as exc:
-            raise error(str(exc)) from None
-
-    return Annotated[str, AfterValidator(parse), Field(title=f"expression in {', '.join(names)}")]
-
-
-def _pytype(tp: Any) -> Any:
-    """A registry option type for pydantic: fixed-size tuples become arrays."""
-    args = get_args(tp)
-    if get_origin(tp) is tuple:
-        if args[-1] is Ellipsis:
-            return list[_pytype(args[0])]  # type: ignore[misc]
-        return Annotated[list[_pytype(args[0])], Field(min_length=len(args), max_length=len(args))]  # type: ignore[misc]
-    if get_origin(tp) in (Union, types.UnionType):
-        forms = {"array" if get_origin(a) is tuple else "number": _pytype(a) for a in args}
-        return by_kind(" or ".join(map(_words, args)), **forms)
-    return tp
-
-
-def _words(tp: Any) -> str:
-    """``'an integer'``, ``'an array of 2 numbers'``, ... (for messages)."""
-    if get_origin(tp) is tuple:
-        return f"an array of {len(get_args(tp))} {_words(get_args(tp)[0]).split()[-1]}s"
-    return {int: "an integer", float: "a number"}.get(tp, str(tp))
-
+from .mesh_forms import MeshFile, MeshForm
+from .sections import Section, by_kind, choice, components, expression, library_default
 
 Vector: TypeAlias = Annotated[list[float], Field(min_length=2, max_length=2)]
 #: A vector of a 2D (2 components) or a 3D (3 components) problem; the mesh decides which.
 Vector23: TypeAlias = Annotated[list[float], Field(min_length=2, max_length=3)]
-
-
-def mesh_family(name: str) -> Family[Any]:
-    """The 2D or 3D mesh family called ``name`` (or an alias); a ValueError suggests the
-    closest name among all."""
-    return lookup(name, _BY_NAME, _EVERY)
-
-
-_EVERY: dict[str, Family[Any]] = {**FAMILIES, **FAMILIES_3D}
-_BY_NAME = {n: f for f in _EVERY.values() for n in (f.name, *f.aliases)}
 
 
 # ---------------------------------------------------------------------------- boundary
@@ -245,14 +136,6 @@ Coefficient: TypeAlias = by_kind(  # type: ignore[valid-type]
 )
 
 
-def components(*names: str) -> Any:
-    """An array of 2 (a 2D mesh) or 3 (a 3D mesh) numbers or expression strings in
-    ``names``."""
-    what = f"a number or an expression string in {', '.join(names)}"
-    item = by_kind(what, number=float, string=expression(*names))
-    return Annotated[list[item], Field(min_length=2, max_length=3)]  # type: ignore[valid-type]
-
-
 VStar: TypeAlias = by_kind(  # type: ignore[valid-type]
     "an array [vx, vy] (3D: [vx, vy, vz]) of numbers or expression strings in t, or a table "
     "{ t, values }",
@@ -306,10 +189,10 @@ class Loads(Section):
     """Body force and traction."""
 
     f1: Load = Field(
-        _default(Problem, "f1"), description="body force [f1x, f1y] (3D: [f1x, f1y, f1z])"
+        library_default(Problem, "f1"), description="body force [f1x, f1y] (3D: [f1x, f1y, f1z])"
     )
     f2: Load = Field(
-        _default(Problem, "f2"),
+        library_default(Problem, "f2"),
         description="traction [f2x, f2y] (3D: [f2x, f2y, f2z]) on Gamma_N",
     )
 
@@ -325,12 +208,12 @@ class Vem(Section):
     """The virtual element bilinear form."""
 
     stabilization: Literal[STABILIZATIONS] = Field(  # type: ignore[valid-type]
-        _default(Problem, "stabilization"),
+        library_default(Problem, "stabilization"),
         description="weight of the dofi-dofi stabilization: 'paper' (1, as in the paper), "
         "'eta' (2 eta) or 'trace' (trace of the consistency matrix / n_dof)",
     )
     order: int = Field(
-        _default(Problem, "order"),
+        library_default(Problem, "order"),
         ge=1,
         le=2,
         description="order k of the virtual element space: 1 (the paper's examples: vertex "
@@ -431,19 +314,19 @@ class Solver(Section):
     """The solver of the step problems."""
 
     method: Literal[tuple(SOLVERS)] = Field(  # type: ignore[valid-type]
-        _default(SolverOptions, "method"),
+        library_default(SolverOptions, "method"),
         description="'newton': semismooth Newton condensed onto the contact dofs; "
         "'newton-full': on all dofs; 'uzawa': the paper's Uzawa iteration",
     )
     tol: float = Field(
-        _default(SolverOptions, "tol"),
+        library_default(SolverOptions, "tol"),
         description="bound on the scaled KKT residuals of every step, > 0",
     )
     max_iter: int | None = Field(
         None, description="iteration limit per time level, >= 1 (default: the method's own)"
     )
     backend: Literal[BACKENDS] = Field(  # type: ignore[valid-type]
-        _default(SolverOptions, "backend"),
+        library_default(SolverOptions, "backend"),
         description="sparse direct solver ('auto': PARDISO if pypardiso is installed, else SciPy)",
     )
 
@@ -554,67 +437,6 @@ class Boundary(Section):
 BoundaryForm: TypeAlias = by_kind(  # type: ignore[valid-type]
     "a table or the string 'file'", table=Boundary, string=Literal["file"]
 )
-
-
-# ---------------------------------------------------------------------------- mesh
-class MeshFile(Section):
-    """A mesh file."""
-
-    file: str = Field(
-        description="mesh file (meshio: .vtu, .msh, ...), relative to the configuration file; "
-        "a file with volume cells (tetrahedra, hexahedra, wedges, pyramids, polyhedra) is a 3D "
-        "mesh"
-    )
-
-
-class Generated(Section):
-    """A generated mesh; the other keys are the options of the family."""
-
-    @classmethod
-    def _unknown(cls, key: str, names: list[str], data: dict[str, Any]) -> str:
-        return f"unknown key {key!r} for generator {data.get('generator')!r}{suggest(key, names)}"
-
-
-def _family_model(fam: Family) -> type[Generated]:
-    fields: dict[str, Any] = {
-        "generator": (Literal[(fam.name, *fam.aliases)], Field(description=fam.description))
-    }
-    for o in fam.options:
-        tp = _pytype(o.type) if o.default is not None else _pytype(o.type) | None
-        fields[o.name] = (tp, Field(o.default, description=o.help))
-    return create_model(  # type: ignore[no-any-return]
-        f"{fam.name.title()}Mesh", __base__=Generated, __doc__=fam.description, **fields
-    )
-
-
-MESH_FORMS: dict[str, type[Section]] = {n: _family_model(f) for n, f in _EVERY.items()}
-MESH_FORMS["file"] = MeshFile
-
-
-def _mesh_form(v: Any) -> str | None:
-    if not isinstance(v, dict) or ("file" in v) == ("generator" in v):
-        return None
-    try:
-        return "file" if "file" in v else mesh_family(v["generator"]).name
-    except (ValueError, TypeError):
-        return None
-
-
-def _mesh_error(v: Any) -> str:
-    if not isinstance(v, dict):
-        return f"must be a table, {got(v)}"
-    if ("file" in v) == ("generator" in v):
-        return "needs exactly one of 'generator' or 'file'" + (", not both" if "file" in v else "")
-    if not isinstance(v["generator"], str):
-        return f"generator must be a string, {got(v['generator'])}"
-    try:
-        mesh_family(v["generator"])
-    except ValueError as exc:
-        return f"generator = {exc}"
-    return "is invalid"  # pragma: no cover - _mesh_form accepted it
-
-
-MeshForm: TypeAlias = choice(_mesh_form, _mesh_error, **MESH_FORMS)  # type: ignore[valid-type]
 
 
 # ---------------------------------------------------------------------------- the file

@@ -4,7 +4,7 @@ Each family is a generator of meshes of a rectangle (Voronoi meshes: of any poly
 with a name, the names it is also known by (its function's name), a one-line
 description and the options it takes (name, type, default, one-line help). The
 configuration schema builds the keys of ``[mesh] generator = NAME`` from
-:data:`FAMILIES` (:mod:`vemwear.config.schema`), and ``vemwear mesh generate`` its
+:data:`FAMILIES` (:mod:`vemwear.config.mesh_forms`), and ``vemwear mesh generate`` its
 ``--cells``, ``--divisions``, ``--seed`` and ``--param`` options. Defaults are those of
 the generator functions' signatures. Option types are Python annotations (tuples for
 fixed-size arrays, ``Literal`` for choices); values are checked by the generators.
