@@ -15,13 +15,12 @@ import pytest
 from vemwear.paper import ex52, ex55_reference
 from vemwear.paper.orders import (
     COLUMNS,
-    OrdersReference,
     cost_markdown,
     orders_markdown,
     rows_csv,
     run,
-    run_final,
 )
+from vemwear.paper.orders_errors import OrdersReference, run_final
 from vemwear.post.compare import Comparison
 from vemwear.post.norms import contact_l2_norm
 from vemwear.post.quadratic import refined_level_fields, refined_mesh

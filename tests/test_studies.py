@@ -182,7 +182,9 @@ def test_workers_report_each_run_of_a_chunk_as_it_finishes(tmp_path: Path) -> No
     events), one after the other, before the task ends."""
     from vemwear.studies import load_study
     from vemwear.studies.dataset import run_arrays
-    from vemwear.studies.execute import PROGRESS_TOPIC, open_study_dir, run_all, study_client
+    from vemwear.studies.execute import run_all, study_client
+    from vemwear.studies.layout import open_study_dir
+    from vemwear.studies.tasks import PROGRESS_TOPIC
 
     st = load_study(_study(tmp_path, '[axes]\n"contact.kappa" = [1.0, 2.0, 3.0, 4.0]\n'))
     out = open_study_dir(tmp_path / "out", "sweep")
@@ -301,7 +303,7 @@ def test_a_stopped_study_started_again_skips_finished_runs(
     tmp_path: Path, scheduler: tuple[str, list[int]]
 ) -> None:
     from vemwear.runner.outdir import locked_by
-    from vemwear.studies.execute import is_complete
+    from vemwear.studies.layout import is_complete
 
     address, _ = scheduler
     base = small_config("case", divisions=(16, 8), steps=600)

@@ -8,7 +8,8 @@ default, or any cluster through a ``distributed.Client``).
 - :func:`sweep`: a study file (base configuration, axes over dotted config keys, a
   grid, zip, Latin hypercube or Sobol design) -> one :class:`xarray.Dataset`
   (``OUTDIR/study.nc``), figures and a report (:mod:`~vemwear.studies.design`,
-  :mod:`~vemwear.studies.execute`, :mod:`~vemwear.studies.dataset`,
+  :mod:`~vemwear.studies.execute`, :mod:`~vemwear.studies.tasks`,
+  :mod:`~vemwear.studies.layout`, :mod:`~vemwear.studies.dataset`,
   :mod:`~vemwear.studies.plots`).
 - :func:`fit`: calibrate kappa (and mu, c, g) against measured wear profiles by
   bounded least squares, the finite-difference Jacobian's runs in parallel

@@ -43,7 +43,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .design import Study
-from .execute import RUNS_DIR, Execution
+from .execute import Execution
+from .layout import RUNS_DIR
 
 __all__ = ["SCALARS", "STUDY_NC", "build_dataset", "run_arrays", "write_dataset"]
 

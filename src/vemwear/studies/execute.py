@@ -1,74 +1,45 @@
-"""Running the runs of a study on Dask distributed, one output directory per run.
+"""Running the runs of a study on Dask distributed: what the client does.
 
-The layout of a study's output directory ``OUTDIR``:
+The client (:func:`study_client`: given, connected to a scheduler, or an embedded
+``LocalCluster``) has its workers prepared once (:func:`prepare_worker`);
+:func:`run_all` submits the runs not yet complete, gathers their records and counts them
+on a progress bar. What a task does on a worker is in :mod:`~vemwear.studies.tasks`; the
+layout of the output directory and the records of the runs in
+:mod:`~vemwear.studies.layout`.
 
-``runs/<id>/``
-    The output directory of run ``<id>`` as ``vemwear run`` writes it
-    (:mod:`vemwear.runner`: marker, lock, streamed levels, checkpoints, resume).
-``configs/<id>.toml``
-    The run's whole configuration: ``vemwear run OUTDIR/configs/<id>.toml -o
-    OUTDIR/runs/<id>`` repeats it by hand.
-``log/<id>.json``
-    The record of the run's last attempt: parameters, ``status`` (``done`` or
-    ``failed``), ``error``, ``wall_time``, the worker.
-
-The runs go to Dask in chunks: one task (:func:`run_chunk`) runs a few runs one after
-the other (:func:`run_task` each) on a worker with one thread, its BLAS limited to one
+The runs go to Dask in chunks: one task (:func:`~vemwear.studies.tasks.run_chunk`) runs
+a few runs one after the other on a worker with one thread, its BLAS limited to one
 thread (the runs are the parallelism). Chunks keep the scheduler's work per run small
 when runs take milliseconds (Dask's overhead is about a millisecond of CPU per task on
 each side, taken from the cores that run the runs), and there are still several chunks
-per worker to balance the load. A run that raises is tried again once, then recorded
-as failed with its error; it never stops the others. The tasks of a worker that dies
-are rescheduled by Dask onto the others. A run whose directory holds a complete result
-is skipped, so a study stopped and started again only computes what is missing (also
-within a rescheduled chunk); a run stopped half-way resumes from its checkpoint. The
-output directory must be on a file system every worker sees.
+per worker to balance the load (:func:`chunk_size`). The tasks of a worker that dies
+are rescheduled by Dask onto the others.
 """
 
 from __future__ import annotations
 
 import contextlib
-import json
 import logging
 import os
-import socket
 import sys
 import threading
 import time
 import weakref
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from ..util.atomic import write_atomic
 from .design import RunSpec, StudyError, params_text
+from .layout import RUNS_DIR, _complete_record, _failed, _write_record, is_complete
+from .tasks import PROGRESS_TOPIC, Extract, run_chunk
 
 __all__ = [
-    "CONFIGS_DIR",
-    "LOG_DIR",
-    "PROGRESS_TOPIC",
-    "RUNS_DIR",
     "Execution",
-    "RunFailed",
     "chunk_size",
-    "is_complete",
-    "open_study_dir",
-    "read_record",
     "run_all",
-    "run_chunk",
-    "run_task",
     "study_client",
 ]
-
-RUNS_DIR = "runs"
-CONFIGS_DIR = "configs"
-LOG_DIR = "log"
-
-
-class RunFailed(RuntimeError):
-    """A run raised on a worker (the message names the exception and its text)."""
 
 
 # ---------------------------------------------------------------------------- the client
@@ -214,229 +185,13 @@ def prepare_worker() -> None:
     threadpool_limits(limits=1)
 
 
-# ---------------------------------------------------------------------------- the output
-def open_study_dir(
-    outdir: str | os.PathLike[str], command: str, protect: Sequence[Any] = ()
-) -> Path:
-    """The study's output directory: a new or empty one, or (to continue a stopped
-    study) one that an earlier ``vemwear {command}`` wrote. Anything else is refused
-    with an :class:`~vemwear.runner.OutputDirError` (exit code 2)."""
-    from ..runner.outdir import (
-        OutputDirError,
-        check_output_dir,
-        prepare_output_dir,
-        read_marker,
-        write_marker,
-    )
-
-    out = Path(outdir).expanduser().absolute()
-    marker = read_marker(out) if out.is_dir() else None
-    keep = [p for p in protect if p is not None]
-    if marker is not None and marker.get("command") == command:
-        check_output_dir(out, force=True, protect=keep)  # place, lock, writable
-    elif marker is not None:
-        raise OutputDirError(
-            f"{out} holds the output of `vemwear {marker.get('command', 'run')}`, not of "
-            f"`vemwear {command}`; choose another output directory"
-        )
-    else:
-        prepare_output_dir(out, protect=keep, command=command)
-    for d in (RUNS_DIR, CONFIGS_DIR, LOG_DIR):
-        (out / d).mkdir(exist_ok=True)
-    old = read_marker(out) or {}
-    names = {*old.get("files", []), RUNS_DIR, CONFIGS_DIR, LOG_DIR}
-    write_marker(out, "running", sorted(names), command=command)
-    return out
-
-
-def is_complete(rundir: Path) -> bool:
-    """Whether ``rundir`` holds the complete result of a run."""
-    from ..runner.outdir import read_marker
-
-    m = read_marker(rundir) if rundir.is_dir() else None
-    return bool(m and m.get("state") == "complete" and (rundir / "result.npz").is_file())
-
-
-def read_record(out: Path, rid: str) -> dict[str, Any] | None:
-    """The logged record of run ``rid``, or None."""
-    try:
-        rec = json.loads((out / LOG_DIR / f"{rid}.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return rec if isinstance(rec, dict) else None
-
-
-def _complete_record(out: Path, rid: str, params: dict[str, Any], executed: bool) -> dict:
-    """The record of a run whose directory holds a complete result (its wall time from
-    the logged record, if that is there)."""
-    old = read_record(out, rid) or {}
-    return {
-        "id": rid,
-        "params": params,
-        "status": "done",
-        "error": "",
-        "wall_time": old.get("wall_time", float("nan")),
-        "executed": executed,
-    }
-
-
-def _write_record(out: Path, rec: dict[str, Any]) -> None:
-    write_atomic(out / LOG_DIR / f"{rec['id']}.json", json.dumps(rec, indent=2) + "\n")
-
-
-# ---------------------------------------------------------------------------- the task
-def _wait_unlocked(rundir: Path) -> None:
-    """Wait while another process writes into ``rundir`` (e.g. a task of a stopped study
-    that still runs on a worker); the lock is released when it ends, in any way."""
-    from ..runner.outdir import locked_by
-
-    while rundir.is_dir() and locked_by(rundir) is not None:
-        time.sleep(0.2)
-
-
-def _execute(config_path: Path, rundir: Path) -> Any:
-    """One run of ``config_path`` into ``rundir`` through :mod:`vemwear.runner`:
-    resumed from its checkpoint if a stopped attempt left one, else from the start.
-    Returns the result (None for a cycle-jump run, whose result is in its files)."""
-    from ..config import load_config
-    from ..runner import ResumeError, execute_run, prepare_run
-    from ..runner.checkpoint import CHECKPOINT_NAME
-
-    cfg = load_config(config_path)
-    plan = None
-    if cfg.cycles is None and (rundir / CHECKPOINT_NAME).is_file():
-        with contextlib.suppress(ResumeError):
-            plan = prepare_run(cfg, config_path, rundir, cfg.solver, resume=True)
-    if plan is None:
-        plan = prepare_run(cfg, config_path, rundir, cfg.solver, force=True)
-    if cfg.cycles is not None:
-        from ..runner.cycles import execute_cycles
-
-        execute_cycles(plan, progress=False)
-        return None
-    result = execute_run(plan, progress=False)
-    if isinstance(result, str):  # the arrays did not fit in memory: result.h5 only
-        raise RunFailed(result)
-    return result
-
-
-#: What a task hands back besides the record: ``extract(result)``, e.g. the arrays the
-#: study's Dataset needs, so that the client does not read them back from the files.
-Extract = Callable[[Any], dict[str, Any]]
-
-
-def run_task(
-    rid: str,
-    params: dict[str, Any],
-    config_text: str,
-    outdir: str,
-    extract: Extract | None = None,
-) -> dict[str, Any]:
-    """Run one configuration into ``OUTDIR/runs/<rid>``.
-
-    Returns the run's record (also written to ``OUTDIR/log/<rid>.json``), with
-    ``executed`` False if the directory already held a complete result, and, with
-    ``extract``, ``arrays = extract(result)`` (not logged).
-
-    Raises
-    ------
-    RunFailed
-        Naming the error of the run.
-    """
-    out = Path(outdir)
-    rundir = out / RUNS_DIR / rid
-    config_path = out / CONFIGS_DIR / f"{rid}.toml"
-    t0 = time.perf_counter()
-    started = datetime.now(UTC).isoformat(timespec="seconds")
-    rec: dict[str, Any] = {
-        "id": rid,
-        "params": params,
-        "status": "done",
-        "error": "",
-        "started": started,
-        "worker": f"{socket.gethostname()}:{os.getpid()}",
-    }
-    _wait_unlocked(rundir)
-    if is_complete(rundir):
-        return _complete_record(out, rid, params, executed=False)
-    try:
-        if not config_path.is_file() or config_path.read_text(encoding="utf-8") != config_text:
-            write_atomic(config_path, config_text)
-        result = _execute(config_path, rundir)
-    except Exception as exc:
-        note = getattr(exc, "vemwear_note", "")
-        raise RunFailed(f"{type(exc).__name__}: {exc}{note}") from None
-    rec.update(wall_time=time.perf_counter() - t0, executed=True)
-    _write_record(out, rec)
-    if extract is not None and result is not None:
-        rec["arrays"] = extract(result)
-    return rec
-
-
-def _failed(rid: str, params: dict[str, Any], msg: str) -> dict[str, Any]:
-    return {
-        "id": rid,
-        "params": params,
-        "status": "failed",
-        "error": msg,
-        "wall_time": float("nan"),
-        "executed": True,
-        "finished": datetime.now(UTC).isoformat(timespec="seconds"),
-    }
-
-
-def run_chunk(
-    runs: list[tuple[str, dict[str, Any], str]],
-    outdir: str,
-    retries: int = 1,
-    extract: Extract | None = None,
-) -> list[dict[str, Any]]:
-    """Run ``(id, params, config text)`` one after the other (a Dask task).
-
-    A run that raises is tried ``retries`` more times, then recorded as failed (its
-    record in ``OUTDIR/log``) and the chunk goes on: the task itself does not fail.
-
-    Returns
-    -------
-    list of dict
-        The records, in the order of ``runs``.
-    """
-    records = []
-    for rid, params, text in runs:
-        for attempt in range(retries + 1):
-            try:
-                rec = run_task(rid, params, text, outdir, extract)
-                break
-            except RunFailed as exc:
-                if attempt == retries:
-                    rec = _failed(rid, params, str(exc))
-                    _write_record(Path(outdir), rec)
-        records.append(rec)
-        _tell_progress(rid)
-    return records
-
-
-#: The Dask event topic of finished runs (the client's progress bar counts them).
-PROGRESS_TOPIC = "vemwear-run-finished"
-
-
-def _tell_progress(rid: str) -> None:
-    """Publish that run ``rid`` finished, when running on a Dask worker."""
-    try:
-        from distributed import get_worker
-
-        get_worker().log_event(PROGRESS_TOPIC, rid)
-    except (ImportError, ValueError):  # not on a worker: nobody to tell
-        pass
-
-
+# ---------------------------------------------------------------------------- the study
 def chunk_size(n_runs: int, n_threads: int) -> int:
     """Runs per task: at least four tasks per worker thread (the load stays balanced
     when the runs take different times), at most 16 runs per task."""
     return max(1, min(16, n_runs // (4 * max(n_threads, 1))))
 
 
-# ---------------------------------------------------------------------------- the study
 @dataclass
 class Execution:
     """What one execution of a study did.

@@ -261,7 +261,8 @@ class _Model:
     def evaluate(self, thetas: Sequence[NDArray[np.float64]]) -> list[NDArray[np.float64]]:
         from ..post.results import load_result
         from .dataset import run_arrays
-        from .execute import RUNS_DIR, run_all
+        from .execute import run_all
+        from .layout import RUNS_DIR
 
         specs = list({s.id: s for s in map(self.spec, thetas)}.values())
         ex = run_all(specs, self.out, self.client, progress=False, extract=run_arrays)
@@ -360,7 +361,8 @@ def fit(
     """
     from scipy import optimize, stats
 
-    from .execute import open_study_dir, study_client
+    from .execute import study_client
+    from .layout import open_study_dir
 
     t0 = time.perf_counter()
     src = str(config)

@@ -77,7 +77,8 @@ def sweep(
     """
     from ..runner.outdir import output_lock, read_marker, write_marker
     from .dataset import STUDY_NC, build_dataset, run_arrays, write_dataset
-    from .execute import open_study_dir, run_all, study_client
+    from .execute import run_all, study_client
+    from .layout import open_study_dir
 
     st = study if isinstance(study, Study) else load_study(study)
     outdir = open_study_dir(out, "sweep", protect=[st.path, st.base_path])
