@@ -135,6 +135,17 @@ def _ngons(counts: Mapping[int, int]) -> str:
     return ", ".join(f"{n}-gons {c}" for n, c in counts.items())
 
 
+def _inspect_report(
+    source: str, kind: str, rows: list[tuple[str, str]], s: Mapping[str, Any]
+) -> str:
+    """The report of ``vemwear mesh inspect``: the verdict, the rows and the quality."""
+    head = f"{PROG}: {source}: {'valid' if s['valid'] else 'INVALID'} {kind}"
+    text = head + "\n" + rows_text(rows)
+    if "_report" in s:
+        text += "\n" + str(s["_report"])
+    return text
+
+
 def _inspect_text(source: str, s: Mapping[str, Any]) -> str:
     b = s["boundary_edges"]
     rows = [
@@ -155,11 +166,7 @@ def _inspect_text(source: str, s: Mapping[str, Any]) -> str:
             else f"incomplete: {s['boundary_error']}",
         ),
     ]
-    head = f"{PROG}: {source}: {'valid' if s['valid'] else 'INVALID'} mesh"
-    text = head + "\n" + rows_text(rows)
-    if "_report" in s:
-        text += "\n" + str(s["_report"])
-    return text
+    return _inspect_report(source, "mesh", rows, s)
 
 
 def _inspect_text3d(source: str, s: Mapping[str, Any]) -> str:
@@ -184,11 +191,7 @@ def _inspect_text3d(source: str, s: Mapping[str, Any]) -> str:
             else f"incomplete: {s['boundary_error']}",
         ),
     ]
-    head = f"{PROG}: {source}: {'valid' if s['valid'] else 'INVALID'} 3D mesh"
-    text = head + "\n" + rows_text(rows)
-    if "_report" in s:
-        text += "\n" + str(s["_report"])
-    return text
+    return _inspect_report(source, "3D mesh", rows, s)
 
 
 def cmd_inspect(args: argparse.Namespace) -> int:

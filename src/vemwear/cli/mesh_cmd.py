@@ -33,8 +33,7 @@ exit code 2, as for the other commands (:mod:`vemwear.cli.main`).
 
 The module is one job, the parser of the four ``mesh`` subcommands (their arguments and
 help); what they do is in :mod:`.mesh_actions`, the reading and writing of mesh files in
-:mod:`.mesh_files` (:func:`load_mesh`, :func:`save_mesh` and :data:`MESH_SUFFIXES` are
-importable from here too), the work itself in :mod:`vemwear.mesh` (generation:
+:mod:`.mesh_files`, the work itself in :mod:`vemwear.mesh` (generation:
 :func:`vemwear.mesh.registry.generate_mesh`).
 """
 
@@ -44,15 +43,8 @@ import argparse
 
 from .common import add_debug_option, add_subcommand
 from .mesh_actions import cmd_convert, cmd_generate, cmd_inspect, cmd_plot
-from .mesh_files import MESH_SUFFIXES, load_mesh, save_mesh
 
-__all__ = [
-    "MESH_SUFFIXES",
-    "SUMMARY",
-    "load_mesh",
-    "save_mesh",
-    "setup",
-]
+__all__ = ["SUMMARY", "setup"]
 
 #: The one-line summary of ``vemwear mesh``.
 SUMMARY = "Generate, inspect, plot and convert polygonal meshes."

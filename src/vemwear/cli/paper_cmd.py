@@ -53,6 +53,11 @@ def _example_listing() -> str:
     return "\n".join(f"  {name:<5}{text}" for name, text in available_examples().items())
 
 
+def _order_option(p: argparse.ArgumentParser, help: str) -> None:
+    """``--order``: the order k = 1 or 2 of the virtual element space."""
+    p.add_argument("--order", type=int, choices=(1, 2), default=1, help=help)
+
+
 def setup_example(p: argparse.ArgumentParser) -> None:
     from ..paper import available_examples
 
@@ -66,12 +71,9 @@ def setup_example(p: argparse.ArgumentParser) -> None:
         help="example number: " + ", ".join(examples) + "; or orders (k = 1 against k = 2)",
     )
     p.add_argument("--list", action="store_true", help="list the examples and exit")
-    p.add_argument(
-        "--order",
-        type=int,
-        choices=(1, 2),
-        default=1,
-        help="order k of the virtual element space (default 1, the paper's; 2 for "
+    _order_option(
+        p,
+        "order k of the virtual element space (default 1, the paper's; 2 for "
         "examples 5.2, 5.3, 5.4)",
     )
     add_common_options(p, solve=True, outdir_required=False)
@@ -142,12 +144,8 @@ def setup_manufactured(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--markdown", action="store_true", help="print a Markdown table")
     p.add_argument("--csv", metavar="FILE", help="also write the table as CSV to FILE")
-    p.add_argument(
-        "--order",
-        type=int,
-        choices=(1, 2),
-        default=1,
-        help="order k of the virtual element space (default 1; 2: expected orders H1 2, L2 3)",
+    _order_option(
+        p, "order k of the virtual element space (default 1; 2: expected orders H1 2, L2 3)"
     )
     add_common_options(p, solve=False)
     p.set_defaults(func=cmd_manufactured)
