@@ -21,8 +21,13 @@ These run with freed memory kept by the allocator, as in the command line
 (:func:`vemwear.util.heap.keep_freed_memory`). Then ``condensed run`` again in child
 processes, alternately with the allocator's freed memory kept and returned to the
 system (glibc's default): one untimed run and ``--runs`` timed runs each, with the
-page faults and the kernel time of each run. Last, the floor of the spread: a fixed
-single-threaded NumPy workload of about the same duration, interleaved with the runs.
+page faults and the kernel time of each run. The problem keeps its factorization from
+run to run, so a run is the time loop and the recovery of u at every level; its floor,
+measured right after it, is the block solve it cannot do without: one column per level
+with the same factorization (memory-bound, like most of the run). Last, the floors of
+the machine itself, interleaved with the runs: a fixed single-threaded NumPy workload
+of about the same duration that stays in the caches (sorts of 1.6 MB) and one that
+streams through memory (copies of 128 MB).
 
 Usage::
 
@@ -53,25 +58,29 @@ def _row(name: str, v: list[float], unit: str) -> str:
 
 def _heap_child(n: int, runs: int, kept: bool) -> None:
     """Print, for ``runs`` condensed runs: the wall time, kernel time and page faults of
-    the run, and the wall time of its floor (the factorization with the Schur block of
-    the same stiffness, by the same backend), measured right after it."""
+    the run, and the wall time of its floor (the block solve of one column per level
+    with the run's factorization), measured right after it."""
+    import numpy as np
+
     from vemwear.paper import ex52
     from vemwear.simulate import SolverOptions, simulate
-    from vemwear.solvers.backends import schur_factorize
     from vemwear.util.heap import keep_freed_memory
 
     if kept:
         keep_freed_memory()
     pr = ex52.problem(0.2, 2.0, divisions=(2 * n, n), steps=n)
-    s = pr.discrete.system
-    simulate(pr, SolverOptions("newton"))
+    opts = SolverOptions("newton")
+    simulate(pr, opts)
+    factor = pr.discrete.step_solver(opts).factor  # kept by the problem from run to run
+    B = np.asfortranarray(np.random.default_rng(0).normal(size=(pr.discrete.system.n_free, n + 1)))
+    X = np.empty_like(B, order="F")
     rows = []
     for _ in range(runs):
         r0, t0 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
-        simulate(pr, SolverOptions("newton"))
+        simulate(pr, opts)
         t, r1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_SELF)
         t1 = time.perf_counter()
-        schur_factorize(s.K, s.contact_dofs.ravel(), s.dof_points, "auto")
+        factor.solve(B, out=X)
         floor = time.perf_counter() - t1
         rows.append((t, r1.ru_stime - r0.ru_stime, r1.ru_minflt - r0.ru_minflt, floor))
     print(json.dumps(rows))
@@ -84,6 +93,16 @@ def _floor_work(x: Any, reps: int) -> float:
     t = time.perf_counter()
     for _ in range(reps):
         np.sort(x * 1.0001)
+    return time.perf_counter() - t
+
+
+def _stream_work(a: Any, b: Any, reps: int) -> float:
+    """A fixed memory-bound NumPy workload (copies of ``a`` into ``b``); its wall time."""
+    import numpy as np
+
+    t = time.perf_counter()
+    for _ in range(reps):
+        np.copyto(b, a)
     return time.perf_counter() - t
 
 
@@ -180,17 +199,22 @@ def main(argv: list[str] | None = None) -> int:
 
 def _heap_table(a: argparse.Namespace, run_time: float) -> None:
     """Condensed runs in child processes with the allocator's freed memory kept or
-    returned, each with its floor, interleaved with a fixed NumPy workload of about the
-    same duration on one thread."""
+    returned, each with its floor, interleaved with two fixed NumPy workloads of about
+    the same duration on one thread: one in the caches, one streaming through memory."""
     import numpy as np
     from threadpoolctl import threadpool_limits
 
     x = np.random.default_rng(0).normal(size=200_000)
+    big = np.random.default_rng(1).normal(size=2**24)
+    to = big.copy()  # touched: the copies do not page-fault
     with threadpool_limits(limits=1):
         once = _floor_work(x, 10) / 10
-    reps = max(1, round(run_time / once))
+        reps = max(1, round(run_time / once))
+        once = _stream_work(big, to, 10) / 10
+        copies = max(1, round(run_time / once))
     rows: dict[str, list[tuple[float, ...]]] = {"kept": [], "returned": []}
     sorts: list[float] = []
+    streams: list[float] = []
     for _ in range(a.repeat):
         for mode in rows:
             cmd = [sys.executable, __file__, "--heap-child", mode, "--n", str(a.n)]
@@ -199,11 +223,13 @@ def _heap_table(a: argparse.Namespace, run_time: float) -> None:
             )
             rows[mode] += [tuple(r) for r in json.loads(out.stdout.splitlines()[-1])]
             with threadpool_limits(limits=1):
-                sorts += [_floor_work(x, reps) for _ in range(a.runs)]
+                for _ in range(a.runs):
+                    sorts.append(_floor_work(x, reps))
+                    streams.append(_stream_work(big, to, copies))
     print(
         f"condensed run in child processes ({a.repeat} x {a.runs} runs each, interleaved); "
-        "kernel time and page faults: medians per run; floor: the factorization with "
-        "the Schur block of the same matrix, right after each run"
+        "kernel time and page faults: medians per run; floor: the block solve of one "
+        "column per level with the run's factorization, right after each run"
     )
     for mode, v in rows.items():
         sys_t, faults = statistics.median(r[1] for r in v), statistics.median(r[2] for r in v)
@@ -213,7 +239,8 @@ def _heap_table(a: argparse.Namespace, run_time: float) -> None:
         )
         print(_row(f"  its floor (freed memory {mode})", [r[3] for r in v], "s"))
         print(_row(f"  run / floor (freed memory {mode})", [r[0] / r[3] for r in v], ""))
-    print(_row("NumPy sorts, one thread", sorts, "s"))
+    print(_row("NumPy sorts, one thread (in cache)", sorts, "s"))
+    print(_row("NumPy copies, one thread (128 MB)", streams, "s"))
 
 
 if __name__ == "__main__":
