@@ -70,12 +70,15 @@ def available() -> bool:
 def _mkl_rt() -> Any:
     """MKL's runtime library, loaded with ctypes.
 
-    Idle OpenMP threads of MKL sleep at once instead of spinning for 200 ms after
-    each parallel region (``KMP_BLOCKTIME=0`` unless set already): on a machine with
-    few or busy cores the spinning threads otherwise take the cores from the work
-    that follows (the factorization time varied by more than a factor two without).
+    Idle OpenMP threads of MKL spin for 1 ms after each parallel region, not for
+    OpenMP's default 200 ms (``KMP_BLOCKTIME=1`` unless set already): spinning that
+    long takes the cores of a machine with few or busy cores from the work that
+    follows (the factorization time varied by more than a factor two), while sleeping
+    at once (0) makes every phase of a small problem wake its threads again (with 0,
+    the floor of the 32 x 16 run in ``benchmarks/bench_getfem.py`` is 5-10 % higher;
+    ``benchmarks/bench_speed.py --reference`` shows no difference at 1/256).
     """
-    os.environ.setdefault("KMP_BLOCKTIME", "0")
+    os.environ.setdefault("KMP_BLOCKTIME", "1")
     env = os.environ.get("PYPARDISO_MKL_RT")
     candidates = [env] if env else []
     for root in dict.fromkeys((sys.prefix, sys.base_prefix, site.USER_BASE or "")):
