@@ -75,7 +75,7 @@ def _mkl_rt() -> Any:
     long takes the cores of a machine with few or busy cores from the work that
     follows (the factorization time varied by more than a factor two), while sleeping
     at once (0) makes every phase of a small problem wake its threads again (with 0,
-    the floor of the 32 x 16 run in ``benchmarks/bench_getfem.py`` is 5-10 % higher;
+    the floor of the 32 x 16 run in ``benchmarks/bench_getfem.py`` is about 10 % higher;
     ``benchmarks/bench_speed.py --reference`` shows no difference at 1/256).
     """
     os.environ.setdefault("KMP_BLOCKTIME", "1")
