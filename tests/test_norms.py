@@ -114,6 +114,17 @@ def test_projected_norm_against_quadrature() -> None:
     assert semi.sum() == pytest.approx(np.sum(w * np.sum(f.gradient[cell] ** 2, axis=(1, 2))))
 
 
+@pytest.mark.parametrize("name", sorted(MESHES))
+def test_seminorms_alone_are_those_of_norms_sq(name: str) -> None:
+    """The seminorm without the L2 part: the same numbers, bitwise, as from norms_sq."""
+    m = MESHES[name]
+    pn = ProjectedNorms(m)
+    v = np.random.default_rng(3).standard_normal((m.n_points, 2))
+    _l2, semi = pn.norms_sq(v)
+    np.testing.assert_array_equal(pn.seminorms_sq(v), semi)
+    assert semi.sum() > 0
+
+
 def test_nested_difference_norms() -> None:
     """Two piecewise linear fields on nested meshes: the difference integrated over the fine
     cells equals a quadrature over the fine cells of the two fields evaluated pointwise;

@@ -359,7 +359,7 @@ class Comparison:
                 l2, semi = (float(x.sum()) for x in coarse_norms.norms_sq(uh - ur[idx]))
                 rl2, rsemi = (float(x.sum()) for x in coarse_norms.norms_sq(ur[idx]))
                 put("u", "H1_coarse", j, l2 + semi, rl2 + rsemi)
-                _l2, semi_fine = self.fine.norms_sq((Pu @ uh.ravel()) - ur.ravel())
+                semi_fine = self.fine.seminorms_sq((Pu @ uh.ravel()) - ur.ravel())
                 put("u", "H1semi_meanvalue", j, float(semi_fine.sum()), r_semi)
             for key, e in (
                 ("L2", wear_error(r.mesh, r.contact_nodes, Pw @ c.wear[a], r.wear[b])),

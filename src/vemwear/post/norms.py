@@ -46,6 +46,7 @@ __all__ = [
     "displacement_error",
     "exact_errors",
     "linear_norms_sq",
+    "linear_seminorms_sq",
     "nested_difference_norms_sq",
     "projected_norm",
     "relative_error",
@@ -109,6 +110,14 @@ def linear_norms_sq(
     return np.maximum(l2, 0.0), area * (col0 + col1)
 
 
+def linear_seminorms_sq(area: NDArray[np.float64], D: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The squared H1 seminorm per cell of ``c + D (x - xbar)``, ``|K| |D|_F^2``: the
+    second part of :func:`linear_norms_sq` (the same operations, the same numbers)
+    without the L2 part."""
+    a00, a01, a10, a11 = D[:, 0, 0], D[:, 0, 1], D[:, 1, 0], D[:, 1, 1]
+    return area * ((a00 * a00 + a10 * a10) + (a01 * a01 + a11 * a11))
+
+
 class ProjectedNorms:
     """Norms of ``Pi u`` on one mesh, for many fields ``u``.
 
@@ -138,6 +147,12 @@ class ProjectedNorms:
         or ``Pi u`` itself)."""
         f = u if isinstance(u, LinearFields) else self.projection(u)
         return linear_norms_sq(self.area, self.M1, self.M2, f.value, f.gradient)
+
+    def seminorms_sq(self, u: ArrayLike | LinearFields) -> NDArray[np.float64]:
+        """The second part of :meth:`norms_sq` alone: the squared H1 seminorm of ``Pi u``
+        on every cell."""
+        f = u if isinstance(u, LinearFields) else self.projection(u)
+        return linear_seminorms_sq(self.area, f.gradient)
 
     def norm(self, u: ArrayLike | LinearFields, norm: str = "H1") -> float:
         """``||Pi u||`` in the norm ``"H1"`` or ``"H1semi"`` (module docstring)."""
