@@ -351,6 +351,25 @@ def test_help_and_version_import_no_heavy_module() -> None:
     assert out.stdout.strip().splitlines()[-1] == "[]"
 
 
+def test_run_without_figures_imports_no_matplotlib(small: Path, tmp_path: Path) -> None:
+    """A run with ``figures = false`` never imports matplotlib (0.3-0.5 s of start-up):
+    its summary's table of forces included."""
+    small.write_text(
+        SMALL.replace("figures = true", "figures = false").replace("vtk = true", "vtk = false")
+    )
+    code = (
+        "import sys\n"
+        "from vemwear.cli.main import main\n"
+        f"code = main(['run', {str(small)!r}, '-o', {str(tmp_path / 'out')!r}, '--no-progress'])\n"
+        "print(code, 'matplotlib' in sys.modules)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True
+    )
+    assert out.stdout.strip().splitlines()[-1] == "0 False"
+    assert (tmp_path / "out" / "summary.json").exists()
+
+
 def test_example_list(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["example", "--list"]) == 0
     out = capsys.readouterr().out

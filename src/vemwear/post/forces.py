@@ -13,10 +13,11 @@ import os
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from ..simulate.loop import Result
 
 __all__ = ["force_table", "part_directions", "plot_forces"]
@@ -79,6 +80,8 @@ def plot_forces(result: Result, path: str | os.PathLike[str] | None = None) -> F
     F = np.asarray(result.forces) if result.forces is not None else np.zeros((len(result.t), 0, d))
     t = np.asarray(result.t)
     normals = part_directions(result)
+    from matplotlib.figure import Figure  # here: the table of forces needs no matplotlib
+
     fig = Figure(figsize=(10.0, 4.0), layout="constrained")
     ax_c, ax_r = fig.subplots(1, 2)
     for j, (name, kind) in enumerate(result.force_parts):
