@@ -17,7 +17,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
-from tqdm.auto import tqdm
 
 from ..solvers import StepSolution
 from ..solvers.system import ConvergenceError, StepData, check_converged, kkt_residuals_block
@@ -191,6 +190,8 @@ def run_levels(
     try:
         levels: Iterable[int] = range(now[0], L)
         if progress:  # a disabled bar still costs 0.1 ms to make
+            from tqdm.auto import tqdm  # here: tqdm.auto imports asyncio (30 ms)
+
             levels = tqdm(levels, desc="time levels", unit="lvl", leave=False)
         for n in levels:
             _, w, guess = now
