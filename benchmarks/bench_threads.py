@@ -74,6 +74,10 @@ def _heap_child(n: int, runs: int, kept: bool) -> None:
 
     if kept:
         keep_freed_memory()
+    else:  # simulate makes the setting at its first call: glibc's default needs it off
+        import importlib
+
+        importlib.import_module("vemwear.simulate.loop").keep_freed_memory = lambda: False
     pr = ex52.problem(0.2, 2.0, divisions=(2 * n, n), steps=n)
     s = pr.discrete.system
     opts = SolverOptions("newton")

@@ -104,18 +104,25 @@ def linear_norms_sq(
     m0, m1 = M1[:, 0], M1[:, 1]
     s00, s01, s11 = M2[:, 0, 0], M2[:, 0, 1], M2[:, 1, 1]
     cDM1 = c0 * (a00 * m0 + a01 * m1) + c1 * (a10 * m0 + a11 * m1)
-    col0, col1, cross = a00 * a00 + a10 * a10, a01 * a01 + a11 * a11, a00 * a01 + a10 * a11
-    quad = s00 * col0 + s11 * col1 + 2.0 * s01 * cross  # tr(D M2 D^T)
+    col0, col1, semi = _gradient_squares(area, D)
+    quad = s00 * col0 + s11 * col1 + 2.0 * s01 * (a00 * a01 + a10 * a11)  # tr(D M2 D^T)
     l2 = area * (c0 * c0 + c1 * c1) + 2.0 * cDM1 + quad
-    return np.maximum(l2, 0.0), area * (col0 + col1)
+    return np.maximum(l2, 0.0), semi
 
 
 def linear_seminorms_sq(area: NDArray[np.float64], D: NDArray[np.float64]) -> NDArray[np.float64]:
     """The squared H1 seminorm per cell of ``c + D (x - xbar)``, ``|K| |D|_F^2``: the
-    second part of :func:`linear_norms_sq` (the same operations, the same numbers)
-    without the L2 part."""
+    second part of :func:`linear_norms_sq` without the L2 part."""
+    return _gradient_squares(area, D)[2]
+
+
+def _gradient_squares(
+    area: NDArray[np.float64], D: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The squared lengths of the columns of every ``D`` and ``|K| |D|_F^2``."""
     a00, a01, a10, a11 = D[:, 0, 0], D[:, 0, 1], D[:, 1, 0], D[:, 1, 1]
-    return area * ((a00 * a00 + a10 * a10) + (a01 * a01 + a11 * a11))
+    col0, col1 = a00 * a00 + a10 * a10, a01 * a01 + a11 * a11
+    return col0, col1, area * (col0 + col1)
 
 
 class ProjectedNorms:
