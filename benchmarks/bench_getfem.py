@@ -38,8 +38,9 @@ the first-call set-up of its libraries (MUMPS, MKL, SciPy) is not counted as com
 Both children solve all levels t_0 ... t_N. **Compute** time is measured inside each
 child from building the mesh to the wear at T (mesh building included on both sides:
 ``Mesh('pt2D')`` from the arrays and its regions for GetFEM, the generator and the
-tagging for vemwear); interpreter start, imports (vemwear's lazily imported modules
-are imported first) and reading the mesh file are excluded. **Whole** is the wall
+tagging for vemwear); interpreter start, imports (vemwear's child first imports the
+modules a session with vemwear has loaded: SciPy's sparse solvers and spatial tools,
+matplotlib's paths) and reading the mesh file are excluded. **Whole** is the wall
 time of the child process seen from here. The sizes run interleaved ``--repeat``
 times; the table gives min / median / max, the ratio of the medians
 (GetFEM / vemwear), the Newton iterations of all levels, and the agreement of the
@@ -187,7 +188,9 @@ from vemwear.simulate import Problem, SolverOptions, TimeGrid, simulate
 from vemwear.solvers.backends import resolve_backend, schur_factorize
 from vemwear.vem import Material
 
-# modules that vemwear imports on first use: imports are not compute time
+# a warm process: modules that vemwear or a session around it imports (SciPy's sparse
+# solvers and spatial tools, matplotlib) are loaded before the timed runs; without
+# matplotlib.path and multiprocessing the first 32 x 16 run is about 6 ms slower
 for name in ("matplotlib.path", "multiprocessing", "scipy.sparse.csgraph",
              "scipy.sparse.linalg", "scipy.spatial", "threadpoolctl",
              "vemwear.solvers.backends.pardiso"):
