@@ -51,6 +51,29 @@ def test_prolongation_reproduces_linear_fields() -> None:
         prolongation(coarse, np.array([[5.0, 5.0]]))
 
 
+def test_prolongation_with_cell_hints_is_the_same_map() -> None:
+    """The coarse cell of a fine cell around each fine vertex (what Comparison passes)
+    gives the same matrix as the search among the nearest cells; hints that miss (a
+    wrong cell, or -1) fall back to that search."""
+    from vemwear.mesh import rectangle_triangles
+    from vemwear.mesh.locate import nested_cells
+
+    fine = rectangle_triangles(SIZE, (16, 8))
+    for coarse in (rectangle_squares(SIZE, (4, 2)), squares_with_hanging_nodes(SIZE, (4, 2))):
+        cells = nested_cells(coarse, fine)
+        hint = np.full(fine.n_points, -1, dtype=np.int64)
+        hint[fine.cell_vertices] = cells[fine.edge_cells]
+        assert np.all(hint >= 0)
+        P = prolongation(coarse, fine.points)
+        for h in (hint, np.where(np.arange(fine.n_points) % 3 == 0, -1, hint), (hint + 3) % 8):
+            Q = prolongation(coarse, fine.points, cells=h)
+            assert abs(P - Q).max() <= 1e-15
+        up = (Q @ (C + coarse.points @ B.T).ravel()).reshape(-1, 2)
+        np.testing.assert_allclose(up, C + fine.points @ B.T, atol=1e-13)
+    with pytest.raises(NonNestedMeshError):
+        prolongation(coarse, np.array([[5.0, 5.0]]), cells=np.array([0]))
+
+
 def test_identical_solutions_zero_error() -> None:
     r = simulate(ex55.problem(4), store="all")
     h = solution_errors(r, r)

@@ -215,7 +215,20 @@ def nested_cells(coarse: Mesh, fine: Mesh, *, tol: float | None = None) -> NDArr
         If a fine cell is not inside one coarse cell; the message names the first one.
     """
     tol = extent_tol(coarse.points, tol)
-    cell = locate_cells(coarse, interior_points(fine))
+    V, Vn = padded_edges(coarse)
+    C = coarse.points
+    from scipy.spatial import cKDTree
+
+    # an interior point of a fine cell lies strictly inside one coarse cell, so the order
+    # in which cells are tried does not matter: the cell with the nearest vertex average
+    # first (it holds most points), the full search of locate_cells for the others
+    pts = interior_points(fine)
+    _d, near = cKDTree(vertex_averages(coarse)).query(pts, k=1)
+    near = np.asarray(near, dtype=np.int64)
+    hit = inside_polygons(pts[:, None, :], C[V[near]], C[Vn[near]])
+    cell = np.where(hit, near, -1)
+    if not np.all(hit):
+        cell[~hit] = locate_cells(coarse, pts[~hit])
     out = np.flatnonzero(cell < 0)
     if out.size:
         f = int(out[0])
@@ -223,8 +236,6 @@ def nested_cells(coarse: Mesh, fine: Mesh, *, tol: float | None = None) -> NDArr
             f"the meshes are not nested: {out.size} fine cells lie outside the coarse mesh "
             f"(first: cell {f} with vertices {fine.points[fine.cell(f)].tolist()})"
         )
-    V, Vn = padded_edges(coarse)
-    C = coarse.points
     for n, (ids, verts) in fine.groups.items():
         P = fine.points[verts].reshape(-1, 1, 2)  # every vertex of the group's cells
         c = np.repeat(cell[ids], n)

@@ -330,7 +330,10 @@ class Comparison:
         cells = nested_cells(c.mesh, r.mesh, tol=self.tol)
         ic, ir = self._levels(c, levels)
         coarse_norms = ProjectedNorms(c.mesh)
-        Pu = prolongation(c.mesh, r.mesh.points, tol=self.tol)
+        # a fine vertex lies in the closure of the coarse cell of any fine cell around it
+        vertex_cell = np.full(r.mesh.n_points, -1, dtype=np.int64)
+        vertex_cell[r.mesh.cell_vertices] = cells[r.mesh.edge_cells]
+        Pu = prolongation(c.mesh, r.mesh.points, tol=self.tol, cells=vertex_cell)
         Pw = contact_prolongation(
             c.mesh, c.contact_nodes, r.mesh.points[r.contact_nodes], tol=self.tol
         )

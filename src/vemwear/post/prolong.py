@@ -34,6 +34,7 @@ def prolongation(
     *,
     tol: float | None = None,
     candidates: int = 12,
+    cells: ArrayLike | None = None,
 ) -> sp.csr_matrix:
     """The linear map from coarse vertex values to values at fine points (nested meshes).
 
@@ -55,6 +56,11 @@ def prolongation(
         of the bounding box of the coarse mesh.
     candidates : int
         Number of nearest cells (by vertex average) tried for every point.
+    cells : (q,) array_like of int, optional
+        For every point, a coarse cell whose closure should contain it (-1: none known),
+        e.g. the coarse cell of a fine cell around a fine vertex
+        (:func:`~vemwear.mesh.locate.nested_cells`). It is tried first; only the points
+        it does not hold are searched among the nearest cells.
 
     Returns
     -------
@@ -87,16 +93,12 @@ def prolongation(
     # 2. points on a coarse edge or inside a coarse cell
     V, Vn = padded_edges(coarse)  # (nc, nmax), padded with degenerate edges
     nmax = V.shape[1]
-    k = min(int(candidates), coarse.n_cells)
-    todo = np.flatnonzero(dist > tol)
-    _d, cand = cKDTree(vertex_averages(coarse)).query(X[todo], k=k)
-    cand = np.asarray(cand).reshape(len(todo), k)
-    for r in range(k):
-        if todo.size == 0:
-            break
-        cells = cand[:, r]
+
+    def claim(todo: NDArray[np.int64], owner: NDArray[np.int64]) -> NDArray[np.bool_]:
+        """Add the rows of the points ``todo`` that lie on the boundary of (or inside)
+        their cell of ``owner``; returns the mask of the points left."""
         P = X[todo][:, None, :]
-        A, B = C[V[cells]], C[Vn[cells]]  # (t, nmax, 2): edges A -> B, closing edge last
+        A, B = C[V[owner]], C[Vn[owner]]  # (t, nmax, 2): edges A -> B, closing edge last
         de, s = point_segment_distance(P, A, B)
         j = np.argmin(de, axis=1)
         t_all = np.arange(len(todo))
@@ -104,8 +106,8 @@ def prolongation(
         if np.any(on_edge):
             t_ = np.flatnonzero(on_edge)
             sj = s[t_, j[t_]]
-            add(todo[t_], V[cells[t_], j[t_]], 1.0 - sj)
-            add(todo[t_], Vn[cells[t_], j[t_]], sj)
+            add(todo[t_], V[owner[t_], j[t_]], 1.0 - sj)
+            add(todo[t_], Vn[owner[t_], j[t_]], sj)
         inside = inside_polygons(P, A, B) & ~on_edge
         if np.any(inside):
             # mean value coordinates: w_i = (tan(a_{i-1}/2) + tan(a_i/2)) / r_i, with a_i the
@@ -123,11 +125,26 @@ def prolongation(
             w = w / np.concatenate([np.repeat(tot, nmax), np.repeat(tot, nmax)])
             add(
                 np.concatenate([pts, pts]),
-                np.concatenate([V[cells[t_]].ravel(), Vn[cells[t_]].ravel()]),
+                np.concatenate([V[owner[t_]].ravel(), Vn[owner[t_]].ravel()]),
                 w,
             )
-        keep = ~(on_edge | inside)
-        todo, cand = todo[keep], cand[keep]
+        return ~(on_edge | inside)
+
+    todo = np.flatnonzero(dist > tol)
+    if cells is not None and todo.size:
+        hint = np.asarray(cells, dtype=np.int64).reshape(q)[todo]
+        known = hint >= 0
+        left = claim(todo[known], hint[known])
+        todo = np.sort(np.concatenate([todo[known][left], todo[~known]]))
+    k = min(int(candidates), coarse.n_cells)
+    if todo.size:
+        _d, cand = cKDTree(vertex_averages(coarse)).query(X[todo], k=k)
+        cand = np.asarray(cand).reshape(len(todo), k)
+        for r in range(k):
+            keep = claim(todo, cand[:, r])
+            todo, cand = todo[keep], cand[keep]
+            if todo.size == 0:
+                break
     if todo.size:
         b = int(todo[0])
         raise NonNestedMeshError(
