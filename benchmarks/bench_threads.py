@@ -23,8 +23,9 @@ These run with freed memory kept by the allocator, as in the command line
 (:func:`vemwear.util.heap.keep_freed_memory`). Then ``condensed run`` again in child
 processes, alternately with the allocator's freed memory kept and returned to the
 system (glibc's default): one untimed run and ``--runs`` timed runs each, with the
-page faults and the kernel time of each run. The problem keeps its factorization from
-run to run, so a run is the time loop and the recovery of u at every level; its floor,
+page faults and the kernel time of each run (and, for the repeats more than 10 %
+above the median, their kernel time against the others'). The problem keeps its
+factorization from run to run, so a run is the time loop and the recovery of u at every level; its floor,
 measured right after it, is the block solve it cannot do without: one column per level
 with the same factorization (memory-bound, like most of the run). Then a new
 factorization of the same matrix, the other large work of a study's worker between
@@ -259,6 +260,16 @@ def _heap_table(a: argparse.Namespace, run_time: float) -> None:
             _row(f"condensed run (freed memory {mode})", [r[0] for r in v], "s")
             + f"  kernel {sys_t:.3f} s, {faults:.0f} page faults"
         )
+        med = statistics.median(r[0] for r in v)
+        slow = [r for r in v if r[0] > 1.1 * med]  # more than 10 % above the median
+        if slow:
+            rest = [r for r in v if r[0] <= 1.1 * med]
+            print(
+                f"  {len(slow)} repeats more than 10 % above the median: "
+                f"{statistics.median(r[0] for r in slow) - med:+.3f} s wall, kernel time "
+                f"{statistics.median(r[1] for r in slow):.3f} s against "
+                f"{statistics.median(r[1] for r in rest):.3f} s in the others (medians)"
+            )
         print(_row(f"  its floor (freed memory {mode})", [r[3] for r in v], "s"))
         print(_row(f"  run / floor (freed memory {mode})", [r[0] / r[3] for r in v], ""))
         print(_row(f"  factorization (freed memory {mode})", [r[4] for r in v], "s"))

@@ -8,7 +8,7 @@ beyond 128 KiB of free memory, so each new array page-faults again; NumPy also a
 for transparent huge pages on large arrays, and where the kernel compacts memory to
 find them (``defrag = madvise``) a fault can stall for milliseconds. On the 2-core
 machine, a run at 66,048 unknowns that follows a factorization made 17,490 page faults
-and spent 0.083 s in the kernel with glibc's default, against 359 and 0.012 s with
+and spent 0.063 s in the kernel with glibc's default, against 359 and 0.008 s with
 freed memory kept (``benchmarks/bench_threads.py --n 128``).
 
 :func:`keep_freed_memory` raises both thresholds (``mallopt``): blocks up to 32 MiB
