@@ -144,6 +144,9 @@ def test_summary_contents(run: Result, tmp_path: Path) -> None:
     assert out["u_nu_max"] == pytest.approx(run.u_nu.max())
     assert out["penetration_max_final"] == pytest.approx(run.penetration[-1].max())
     assert out["wear_area_final"] == pytest.approx(run.problem.contact.weights @ run.wear[-1])
+    lengths = np.linalg.norm(run.u, axis=-1)  # (S, n): |u| at every vertex and kept level
+    assert out["displacement_max"] == pytest.approx(lengths.max(), rel=1e-15)
+    assert out["displacement_max_final"] == pytest.approx(lengths[-1].max(), rel=1e-15)
 
 
 def test_failed_save_keeps_old_files(run: Result, tmp_path: Path, monkeypatch) -> None:

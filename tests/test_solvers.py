@@ -59,6 +59,21 @@ def test_condensed_newton_equals_full_newton(small):
     assert rel(rf.p_soft, r.p_soft) < 1e-10
 
 
+def test_released_solvers_are_built_again_with_the_same_numbers():
+    """A problem keeps its step solver (one factorization for every run) until
+    release_solvers drops it (the command line does before writing the outputs)."""
+    pr = paper_problem(divisions=(8, 4), steps=4)
+    opts = SolverOptions("newton")
+    first = simulate(pr, opts)
+    solver = pr.discrete.step_solver(opts)
+    assert pr.discrete.step_solver(opts) is solver
+    pr.discrete.release_solvers()
+    assert pr.discrete.step_solver(opts) is not solver
+    again = simulate(pr, opts)
+    np.testing.assert_array_equal(again.u, first.u)
+    np.testing.assert_array_equal(again.wear, first.wear)
+
+
 @pytest.mark.parametrize("mu,kappa", [(0.2, 2.0), (0.6, 10.0)])
 def test_uzawa_agrees_with_newton(mu, kappa):
     pr = paper_problem(divisions=(8, 4), steps=8, mu=mu, kappa=kappa)

@@ -308,6 +308,8 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
             )
             sink.checkpoint(final)  # every level durable: a failure below loses no solve
             sink.close(completed=plan.storage.n_levels)
+            # the outputs read the kept arrays back: without the factors, in less memory
+            cfg.problem.discrete.release_solvers()
         except BaseException as exc:
             _stop(plan, sink, exc)
             raise

@@ -198,6 +198,12 @@ class Discretization:
             self._solvers[opts] = opts.build(self.system)
         return self._solvers[opts]
 
+    def release_solvers(self) -> None:
+        """Drop the step solvers built so far, with their factorizations (at 1/512 the
+        factors take more memory than the rest of the run); a later run builds them
+        again."""
+        self._solvers.clear()
+
     @property
     def n_dof(self) -> int:
         return int(self.space.n_dofs)
