@@ -620,3 +620,28 @@ def test_the_plan_refuses_with_the_numbers_of_check_and_resume_asks_only_for_the
     resumed = run(config, out, "--resume")
     assert resumed.returncode == 0, resumed.stderr
     assert_same(out, reference)
+
+
+def test_the_memory_model_grows_with_every_size_and_the_rough_estimate_is_a_lower_bound() -> None:
+    """The estimate is non-decreasing in every size (the rough check relies on it), the
+    factorization's term is larger with SuperLU than with PARDISO at every size past
+    MKL's buffers, and the rough estimate, which knows no backend, takes the smaller."""
+    from vemwear.runner.plan import estimate
+
+    sizes = dict(levels=65, points=5000, cells=4900, contact=100, kept=65, stored_u=8)
+    for dim in (2, 3):
+        for backend in ("pardiso", "scipy"):
+            base = estimate(**sizes, paraview=False, base=1e8, dim=dim, backend=backend)
+            for key in sizes:
+                more = dict(sizes, **{key: 2 * sizes[key]})
+                grown = estimate(**more, paraview=False, base=1e8, dim=dim, backend=backend)
+                assert grown.memory >= base.memory and grown.disk >= base.disk, (dim, key)
+        for points in (10, 10**4, 10**6):
+            s = dict(sizes, points=points)
+            by = {
+                b: estimate(**s, paraview=False, base=1e8, dim=dim, backend=b).memory
+                for b in ("pardiso", "scipy", "any")
+            }
+            assert by["any"] == min(by["pardiso"], by["scipy"])
+            if points >= 10**4:
+                assert by["scipy"] > by["pardiso"]

@@ -5,16 +5,23 @@
 * memory: the interpreter and the libraries, what this process holds when the plan is
   made plus 60 MB for the libraries loaded later, and at least 160 MB (how much the
   libraries take depends on the machine: OpenBLAS keeps buffers per core); the sparse
-  factorization of the stiffness, about ``250 N log2 N`` bytes for N unknowns (nested
-  dissection in 2D; measured with ``/usr/bin/time`` on rectangles of 64 x 32 to
-  512 x 256 cells: 167, 197, 439 and 826 MB peak against 173, 219, 426 and 1347 MB
-  estimated, within a factor 2 everywhere); in 3D (3 unknowns per vertex) the fill-in
+  factorization of the stiffness, for N unknowns in 2D (nested dissection) about
+  ``min(2000 N, 150 MB) + 160 N log2 N`` bytes with PARDISO (the first part: MKL's
+  buffers, which grow up to about 150 MB between 17k and 66k unknowns) and
+  ``400 N log2 N`` with SciPy's SuperLU (measured as the peak of ``vemwear run`` over
+  the memory before it, after a first small run, on rectangles of 128 x 64 to
+  1024 x 512 squares, u kept at t = T only: PARDISO 7, 259, 650 and 2936 MB, that is
+  32, 244, 137 and 140 bytes per N log2 N; SuperLU 26, 320 and 1612 MB up to 512 x 256,
+  111, 301 and 339 bytes; ``python benchmarks/bench_estimate.py``: the estimates are
+  1.1 to 1.4 times these peaks); in 3D (3 unknowns per vertex) the fill-in
   of nested dissection grows as ``N^(4/3)``, not ``N log N``: about ``450 N^(4/3)``
   bytes with PARDISO and ``1300 N^(4/3)`` with SciPy's SuperLU (measured on hexahedra
   of the 2 x 1 x 1 box, 16 x 8 x 8, 32 x 16 x 16 and 48 x 24 x 24 cells, N = 4131,
   28611 and 91875: PARDISO 134, 500 and 1869 MB peak, SuperLU 152, 1171 and 5474 MB,
   against 130, 494 and 1967 MB and 186, 1238 and 5491 MB estimated with a base of 100
-  MB); 24 bytes per time level (the time grid and
+  MB); the recovery of u, a block of right-hand sides and one of solutions
+  (``2 * 8 N`` bytes per stored level in the block, at most ``max(32, 2^20 / N)``
+  levels); 24 bytes per time level (the time grid and
   the level tables); the dense inverse of the contact block, ``3 * 8 m^2``; and, when
   the run ends, the kept arrays in memory for ``result.npz`` (twice: read and written);
 * disk: ``result.h5`` (the kept contact rows, ``7 * 8 m`` bytes each, and the stored
@@ -34,7 +41,8 @@ Before they are built (:func:`vemwear.config.load_config`'s ``admit`` hook,
 a lower bound of the real one: the levels from ``[time]`` (exact), the cells the
 generator makes (0 for a mesh file, not known before it is read), ``C/2 + 1`` vertices
 for C cells (Euler's formula: no polygonal mesh has fewer; ``C/6 + 4`` in 3D, the
-vertices of Kuhn tetrahedra, with PARDISO's smaller factor), 2 contact nodes, ``ceil(L /
+vertices of Kuhn tetrahedra), the smaller factorization of the two backends, 2 contact
+nodes, ``ceil(L /
 every)`` kept rows and the stored displacements that ``store_u`` certainly asks for. The
 estimate grows with every size (and the memory this process holds only grows
 meanwhile), so the rough estimate is at most the real-mesh one: it
@@ -78,9 +86,23 @@ def base_memory() -> float:
     return max(_BASE, resident_memory() + _LATER)
 
 
-_FACTOR = 250.0
+#: Bytes per ``N log2 N`` of the factorization in 2D, by resolved backend, and of MKL's
+#: buffers with PARDISO (per unknown, up to a bound).
+_FACTOR_2D = {"pardiso": 160.0, "scipy": 400.0}
+_MKL_BUFFERS = (2000.0, 150e6)
 #: Bytes per ``N^(4/3)`` of the factorization in 3D, by resolved backend.
 _FACTOR_3D = {"pardiso": 450.0, "scipy": 1300.0}
+
+
+def _factor_bytes(n: int, dim: int, backend: str) -> float:
+    """The factorization's memory for n unknowns (the module docstring); ``backend``
+    ``"any"``: the smaller of the two (the rough estimate's lower bound)."""
+    if backend not in ("pardiso", "scipy"):
+        return min(_factor_bytes(n, dim, b) for b in ("pardiso", "scipy"))
+    if dim == 2:
+        mkl = min(_MKL_BUFFERS[0] * n, _MKL_BUFFERS[1]) if backend == "pardiso" else 0.0
+        return mkl + _FACTOR_2D[backend] * n * math.log2(n)
+    return _FACTOR_3D[backend] * float(n) ** (4 / 3)
 
 
 class PlanError(ValueError):
@@ -137,21 +159,21 @@ def estimate(
     dim : int
         2 or 3: the dimension of the mesh (3 unknowns per vertex and more fill-in in 3D).
     backend : str
-        The resolved sparse backend (``pardiso`` or ``scipy``; 3D only).
+        The resolved sparse backend (``pardiso`` or ``scipy``), or ``"any"``: the
+        smaller factorization of the two.
     """
     n = max(dim * points, 2)
     rows = kept * (7 * 8 * contact + 32)
     disp = stored_u * 8 * dim * points
     arrays = rows + disp
-    factor = (
-        _FACTOR * n * math.log2(n)
-        if dim == 2
-        else _FACTOR_3D.get(backend, _FACTOR_3D["scipy"]) * float(n) ** (4 / 3)
-    )
+    # the recovery of u: right-hand sides and solutions of a block of stored levels
+    # (vemwear.simulate.levels.recover_block_size)
+    block = 2 * 8 * n * min(max(stored_u, 1), max(32, 2**20 // n))
     vtk = 16 * points + 160 * cells if dim == 2 else 24 * points + 560 * cells
     memory = (
         (base_memory() if base is None else base)
-        + factor
+        + _factor_bytes(n, dim, backend)
+        + block
         + 24 * levels
         + 24 * float(contact) ** 2
         + (2 * arrays if npz else 0)
@@ -172,6 +194,7 @@ def _estimate_sizes(sizes: Sizes) -> Estimate:
         stored_u=sizes.stored_u,
         paraview=sizes.paraview,
         dim=sizes.dim,
+        backend="any",
     )
 
 
@@ -249,5 +272,5 @@ def estimate_config(cfg: Config, *, base: float | None = None) -> Estimate:
         paraview=out.vtk,
         base=base,
         dim=pr.dim,
-        backend=resolve_backend(cfg.solver.backend) if pr.dim == 3 else "pardiso",
+        backend=resolve_backend(cfg.solver.backend),
     )
