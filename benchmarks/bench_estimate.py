@@ -26,37 +26,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-CONFIG = """\
-title = "estimate {nx}"
-[mesh]
-generator = "squares"
-size = [2.0, 1.0]
-divisions = [{nx}, {ny}]
-[boundary]
-clamped = "left"
-traction = ["top", "right"]
-contact = "bottom"
-[material]
-lam = 4.0
-eta = 4.0
-[loads]
-f1 = [0.0, -0.06]
-[contact]
-p = {{ type = "linear", c = 0.4 }}
-g = 0.1
-mu = 0.2
-kappa = 2.0
-v_star = [1.0, 0.0]
-[time]
-T = 1.0
-steps = {steps}
-[solver]
-backend = "{backend}"
-[output]
-store_u = "final"
-figures = false
-vtk = false
-"""
+from bench_long_runs import PAPER  # the paper's data on squares of (0, 2) x (0, 1)
 
 CHILD = """
 import json, sys
@@ -75,8 +45,12 @@ print(json.dumps({"base": base, "estimate": est, "peak": peak_memory(), "code": 
 def measure(nx: int, backend: str, tmp: Path) -> dict[str, float]:
     """Base, estimate and peak (bytes) of a child's run at ``nx x nx/2``."""
     warm, cfg = tmp / "warm.toml", tmp / f"c{nx}.toml"
-    warm.write_text(CONFIG.format(nx=8, ny=4, steps=2, backend=backend))
-    cfg.write_text(CONFIG.format(nx=nx, ny=nx // 2, steps=16, backend=backend))
+    solver = f'[solver]\nbackend = "{backend}"\n'
+    case = dict(vtk="false", store_u='"final"', checkpoint=0)
+    warm.write_text(PAPER.format(title="warm", nx=8, ny=4, steps=2, **case) + solver)
+    cfg.write_text(
+        PAPER.format(title=f"estimate {nx}", nx=nx, ny=nx // 2, steps=16, **case) + solver
+    )
     cmd = [sys.executable, "-c", CHILD, str(warm), str(tmp / "w"), str(cfg), str(tmp / "o")]
     done = subprocess.run(cmd, capture_output=True, text=True)
     if done.returncode != 0:
