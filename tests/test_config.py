@@ -502,14 +502,18 @@ def test_docs_key_tables_are_generated_from_the_schema() -> None:
 
 
 def test_schema_command_prints_the_json_schema(capsys: pytest.CaptureFixture[str]) -> None:
-    """``vemwear schema`` is a JSON Schema that editors can check files with."""
+    """``vemwear schema`` is a JSON Schema that editors can check files with, made
+    without warnings (defaults of the types the schema states: lists, not tuples)."""
     import json
+    import warnings
 
     import jsonschema
 
     from vemwear.cli.main import main
 
-    assert main(["schema"]) == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["schema"]) == 0
     schema = json.loads(capsys.readouterr().out)
     jsonschema.Draft202012Validator.check_schema(schema)
     check = jsonschema.Draft202012Validator(schema)

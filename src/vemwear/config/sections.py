@@ -33,8 +33,10 @@ __all__ = ["Section", "by_kind", "choice", "components", "expression", "library_
 
 
 def library_default(cls: type, name: str) -> Any:
-    """The default of a field of a library dataclass (one place for each default)."""
-    return {f.name: f for f in dataclasses.fields(cls)}[name].default
+    """The default of a field of a library dataclass (one place for each default); a
+    tuple (the dataclass's immutable default) as a list, the type of a TOML array."""
+    value = {f.name: f for f in dataclasses.fields(cls)}[name].default
+    return list(value) if isinstance(value, tuple) else value
 
 
 class Section(BaseModel):
