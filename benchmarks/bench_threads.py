@@ -65,7 +65,12 @@ def _heap_child(n: int, runs: int, kept: bool) -> None:
     """Print, for ``runs`` condensed runs: the wall time, kernel time and page faults of
     the run, the wall time of its floor (the block solve of one column per level with
     the run's factorization), measured right after it, and that of a new factorization
-    of the same matrix (other large work between runs, as in a study's worker)."""
+    of the same matrix (other large work between runs, as in a study's worker); and the
+    wall and kernel time of the run's writes of u into its result
+    (``Discretization.full_dofs_block``, timed by a wrapper), the first touch of that
+    freshly mapped array."""
+    import importlib
+
     import numpy as np
 
     from vemwear.paper import ex52
@@ -76,9 +81,20 @@ def _heap_child(n: int, runs: int, kept: bool) -> None:
     if kept:
         keep_freed_memory()
     else:  # simulate makes the setting at its first call: glibc's default needs it off
-        import importlib
-
         importlib.import_module("vemwear.simulate.loop").keep_freed_memory = lambda: False
+    writes = [0.0, 0.0]  # wall and kernel seconds of the writes of u, this run
+    cls = importlib.import_module("vemwear.simulate.discrete").Discretization
+    full_dofs_block = cls.full_dofs_block
+
+    def timed(*args: Any, **kw: Any) -> Any:
+        r, t = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
+        try:
+            return full_dofs_block(*args, **kw)
+        finally:
+            writes[0] += time.perf_counter() - t
+            writes[1] += resource.getrusage(resource.RUSAGE_SELF).ru_stime - r.ru_stime
+
+    cls.full_dofs_block = timed
     pr = ex52.problem(0.2, 2.0, divisions=(2 * n, n), steps=n)
     s = pr.discrete.system
     opts = SolverOptions("newton")
@@ -88,6 +104,7 @@ def _heap_child(n: int, runs: int, kept: bool) -> None:
     X = np.empty_like(B, order="F")
     rows = []
     for _ in range(runs):
+        writes[:] = [0.0, 0.0]
         r0, t0 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
         simulate(pr, opts)
         t, r1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_SELF)
@@ -97,7 +114,9 @@ def _heap_child(n: int, runs: int, kept: bool) -> None:
         t2 = time.perf_counter()
         schur_factorize(s.K, s.contact_dofs.ravel(), s.dof_points, "auto")
         other = time.perf_counter() - t2
-        rows.append((t, r1.ru_stime - r0.ru_stime, r1.ru_minflt - r0.ru_minflt, floor, other))
+        rows.append(
+            (t, r1.ru_stime - r0.ru_stime, r1.ru_minflt - r0.ru_minflt, floor, other, *writes)
+        )
     print(json.dumps(rows))
 
 
@@ -268,7 +287,11 @@ def _heap_table(a: argparse.Namespace, run_time: float) -> None:
                 f"  {len(slow)} repeats more than 10 % above the median: "
                 f"{statistics.median(r[0] for r in slow) - med:+.3f} s wall, kernel time "
                 f"{statistics.median(r[1] for r in slow):.3f} s against "
-                f"{statistics.median(r[1] for r in rest):.3f} s in the others (medians)"
+                f"{statistics.median(r[1] for r in rest):.3f} s in the others; writing u "
+                f"into the result {statistics.median(r[5] for r in slow):.3f} s "
+                f"(kernel {statistics.median(r[6] for r in slow):.3f} s) against "
+                f"{statistics.median(r[5] for r in rest):.3f} s "
+                f"(kernel {statistics.median(r[6] for r in rest):.3f} s) (medians)"
             )
         print(_row(f"  its floor (freed memory {mode})", [r[3] for r in v], "s"))
         print(_row(f"  run / floor (freed memory {mode})", [r[0] / r[3] for r in v], ""))

@@ -59,3 +59,69 @@ def test_simulate_makes_the_setting() -> None:
     """A library user's process keeps freed memory after its first ``simulate``, as the
     command line's does from its start."""
     assert _faults("simulate")["faults"] < 200
+
+
+def _huge_kb(address: int) -> int:
+    """AnonHugePages of the mapping of this process that holds ``address`` (smaps; an
+    array's middle: NumPy madvises from its second page on, a mapping of its own)."""
+    inside, huge = False, 0
+    with open("/proc/self/smaps") as fh:
+        for line in fh:
+            head = line.split()[0]
+            if "-" in head and not head.endswith(":"):  # a mapping's first line
+                lo, hi = (int(x, 16) for x in head.split("-"))
+                inside = lo <= address < hi
+            elif inside and head == "AnonHugePages:":
+                huge = int(line.split()[1])
+    return huge
+
+
+def _skip_without_madvised_huge_pages() -> None:
+    try:
+        with open("/sys/kernel/mm/transparent_hugepage/enabled") as fh:
+            if "[madvise]" not in fh.read():
+                pytest.skip("transparent huge pages are not given on madvise here")
+    except OSError:
+        pytest.skip("no transparent huge pages")
+
+
+def test_small_pages_allocates_result_arrays_without_huge_pages() -> None:
+    """Arrays made inside ``small_pages`` get no transparent huge pages where NumPy's
+    madvise would have given them some; NumPy's switch is restored afterwards."""
+    import numpy as np
+
+    from vemwear.util.heap import small_pages
+
+    _skip_without_madvised_huge_pages()
+    switch = (getattr(np, "_core", None) or np.core).multiarray._set_madvise_hugepage
+    before = switch(True)  # NumPy's default, whatever NUMPY_MADVISE_HUGEPAGE says
+    try:
+        outside = np.zeros(2**23)  # 64 MB, written: its pages exist
+        outside[:] = 1.0
+        if _huge_kb(outside.ctypes.data + outside.nbytes // 2) == 0:
+            pytest.skip("the kernel gave no huge pages to a madvised array")
+        with small_pages():
+            made = np.zeros(2**23)
+        made[:] = 1.0
+        assert _huge_kb(made.ctypes.data + made.nbytes // 2) == 0
+        assert switch(True) is True  # restored
+    finally:
+        switch(before)
+
+
+def test_simulate_writes_u_into_small_pages() -> None:
+    """The displacements of a result (8.7 MB here) are written into 4 KB pages."""
+    import numpy as np
+
+    from vemwear.paper import ex52
+    from vemwear.simulate import simulate
+
+    _skip_without_madvised_huge_pages()
+    switch = (getattr(np, "_core", None) or np.core).multiarray._set_madvise_hugepage
+    before = switch(True)
+    try:
+        r = simulate(ex52.problem(0.2, 2.0, divisions=(128, 64), steps=64))
+        assert r.u.nbytes > 8 * 2**20
+        assert _huge_kb(r.u.ctypes.data + r.u.nbytes // 2) == 0
+    finally:
+        switch(before)
