@@ -42,10 +42,9 @@ a lower bound of the real one: the levels from ``[time]`` (exact), the cells the
 generator makes (0 for a mesh file, not known before it is read), ``C/2 + 1`` vertices
 for C cells (Euler's formula: no polygonal mesh has fewer; ``C/6 + 4`` in 3D, the
 vertices of Kuhn tetrahedra), the smaller factorization of the two backends, 2 contact
-nodes, ``ceil(L /
-every)`` kept rows and the stored displacements that ``store_u`` certainly asks for. The
-estimate grows with every size (and the memory this process holds only grows
-meanwhile), so the rough estimate is at most the real-mesh one: it
+nodes, ``ceil(L / every)`` kept rows and the stored displacements that ``store_u``
+certainly asks for. The estimate grows with every size (and the memory this process
+holds only grows meanwhile), so the rough estimate is at most the real-mesh one: it
 refuses only runs that the real-mesh estimate refuses too, and refuses them in a
 fraction of a second, before anything large is allocated (``steps = 1e9``,
 ``n_cells = 1e8``).

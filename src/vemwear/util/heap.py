@@ -5,8 +5,9 @@ blocks, recovered displacements, the factorization's work arrays), and so do the
 of a study in one worker. glibc's ``malloc`` returns every freed block above its mmap
 threshold (128 KiB at first) to the kernel at once and trims the top of its heap
 beyond 128 KiB of free memory, so each new array page-faults again; NumPy also asks
-for transparent huge pages on large arrays, and where the kernel compacts memory to
-find them (``defrag = madvise``) a fault can stall for milliseconds. On the 2-core
+for transparent huge pages on large arrays, and the first write into a fresh huge page
+can stall for milliseconds (on the development machine, a KVM guest, with no
+compaction counted by the kernel: :func:`small_pages`). On the 2-core
 machine, a run at 66,048 unknowns that follows a factorization made 33,842 page faults
 and spent 0.064 s in the kernel with glibc's default, against 16,711 and 0.027 s with
 freed memory kept, nearly all of them the first writes into its new result
