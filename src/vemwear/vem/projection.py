@@ -220,26 +220,32 @@ class Projection:
         nc = mesh.n_cells
         self.xbar = np.zeros((nc, 2))
         self.area = np.zeros(nc)
-        rows, cols, vals = [], [], []
+        # the CSR arrays written in place, cell by cell: rows 6k, 6k + 1 hold n entries,
+        # rows 6k + 2 ... 6k + 5 hold 2n, each row's columns ascending (no COO
+        # temporaries, no sort of all entries)
+        sizes = mesh.cell_sizes
+        row_len = (sizes[:, None] * np.array([1, 1, 2, 2, 2, 2])).ravel()
+        indptr = np.concatenate([[0], np.cumsum(row_len)])
+        start = indptr[:-1:6]  # the first entry of every cell
+        indices = np.empty(
+            int(indptr[-1]), dtype=np.int32 if 2 * mesh.n_points < 2**31 else np.int64
+        )
+        data = np.empty(int(indptr[-1]))
         for n, (ids, verts) in mesh.groups.items():
             lp = local_projection(mesh.points[verts])
             self.xbar[ids], self.area[ids] = lp.xbar, lp.area
             m = len(ids)
-            dofs = 2 * verts[:, :, None] + np.arange(2)  # (m, n, 2)
-            # value at xbar: (1/n) sum_i v_ic for component c
-            for c in range(2):
-                rows.append(np.repeat(6 * ids + c, n))
-                cols.append(dofs[:, :, c].ravel())
-                vals.append(np.full(m * n, 1.0 / n))
-            # gradient: (m, 4, n, 2) weights
-            Gw = lp.gradient.reshape(m, 4, n, 2)
-            r = 6 * ids[:, None, None, None] + 2 + np.arange(4)[None, :, None, None]
-            rows.append(np.broadcast_to(r, Gw.shape).ravel())
-            cols.append(np.broadcast_to(dofs[:, None], Gw.shape).ravel())
-            vals.append(Gw.ravel())
+            order = np.argsort(verts, axis=1, kind="stable")  # ascending columns
+            v = np.take_along_axis(verts, order, axis=1)
+            # gradient: (m, 4, n, 2) weights on the dofs (v_ic), vertices in column order
+            Gw = np.take_along_axis(lp.gradient.reshape(m, 4, n, 2), order[:, None, :, None], 2)
+            dofs = (2 * v[:, :, None] + np.arange(2)).reshape(m, 2 * n)
+            # value at xbar: (1/n) sum_i v_ic for component c; then the gradient rows
+            pos = start[ids][:, None] + np.arange(10 * n)
+            indices[pos] = np.concatenate([2 * v, 2 * v + 1, np.tile(dofs, 4)], axis=1)
+            data[pos] = np.concatenate([np.full((m, 2 * n), 1.0 / n), Gw.reshape(m, 8 * n)], axis=1)
         self.matrix: sp.csr_matrix = sp.csr_matrix(
-            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-            shape=(6 * nc, 2 * mesh.n_points),
+            (data, indices, indptr), shape=(6 * nc, 2 * mesh.n_points)
         )
 
     def __call__(self, u: ArrayLike) -> LinearFields:
