@@ -76,52 +76,48 @@ def _huge_kb(address: int) -> int:
     return huge
 
 
-def _skip_without_madvised_huge_pages() -> None:
+@pytest.fixture
+def madvise_switch():
+    """NumPy's huge-page switch, on (its default, whatever NUMPY_MADVISE_HUGEPAGE says)
+    for the test and restored after it; skips where the kernel gives no huge pages on
+    madvise."""
+    import numpy as np
+
     try:
         with open("/sys/kernel/mm/transparent_hugepage/enabled") as fh:
             if "[madvise]" not in fh.read():
                 pytest.skip("transparent huge pages are not given on madvise here")
     except OSError:
         pytest.skip("no transparent huge pages")
+    switch = (getattr(np, "_core", None) or np.core).multiarray._set_madvise_hugepage
+    before = switch(True)
+    yield switch
+    switch(before)
 
 
-def test_small_pages_allocates_result_arrays_without_huge_pages() -> None:
+def test_small_pages_allocates_result_arrays_without_huge_pages(madvise_switch) -> None:
     """Arrays made inside ``small_pages`` get no transparent huge pages where NumPy's
     madvise would have given them some; NumPy's switch is restored afterwards."""
     import numpy as np
 
     from vemwear.util.heap import small_pages
 
-    _skip_without_madvised_huge_pages()
-    switch = (getattr(np, "_core", None) or np.core).multiarray._set_madvise_hugepage
-    before = switch(True)  # NumPy's default, whatever NUMPY_MADVISE_HUGEPAGE says
-    try:
-        outside = np.zeros(2**23)  # 64 MB, written: its pages exist
-        outside[:] = 1.0
-        if _huge_kb(outside.ctypes.data + outside.nbytes // 2) == 0:
-            pytest.skip("the kernel gave no huge pages to a madvised array")
-        with small_pages():
-            made = np.zeros(2**23)
-        made[:] = 1.0
-        assert _huge_kb(made.ctypes.data + made.nbytes // 2) == 0
-        assert switch(True) is True  # restored
-    finally:
-        switch(before)
+    outside = np.zeros(2**23)  # 64 MB, written: its pages exist
+    outside[:] = 1.0
+    if _huge_kb(outside.ctypes.data + outside.nbytes // 2) == 0:
+        pytest.skip("the kernel gave no huge pages to a madvised array")
+    with small_pages():
+        made = np.zeros(2**23)
+    made[:] = 1.0
+    assert _huge_kb(made.ctypes.data + made.nbytes // 2) == 0
+    assert madvise_switch(True) is True  # restored
 
 
-def test_simulate_writes_u_into_small_pages() -> None:
+def test_simulate_writes_u_into_small_pages(madvise_switch) -> None:
     """The displacements of a result (8.7 MB here) are written into 4 KB pages."""
-    import numpy as np
-
     from vemwear.paper import ex52
     from vemwear.simulate import simulate
 
-    _skip_without_madvised_huge_pages()
-    switch = (getattr(np, "_core", None) or np.core).multiarray._set_madvise_hugepage
-    before = switch(True)
-    try:
-        r = simulate(ex52.problem(0.2, 2.0, divisions=(128, 64), steps=64))
-        assert r.u.nbytes > 8 * 2**20
-        assert _huge_kb(r.u.ctypes.data + r.u.nbytes // 2) == 0
-    finally:
-        switch(before)
+    r = simulate(ex52.problem(0.2, 2.0, divisions=(128, 64), steps=64))
+    assert r.u.nbytes > 8 * 2**20
+    assert _huge_kb(r.u.ctypes.data + r.u.nbytes // 2) == 0

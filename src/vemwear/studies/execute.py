@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from .design import RunSpec, StudyError, params_text
-from .layout import RUNS_DIR, _complete_record, _failed, _write_record, is_complete
+from .layout import RUNS_DIR, complete_record, is_complete, record_failure
 from .tasks import PROGRESS_TOPIC, Extract, run_chunk
 
 __all__ = [
@@ -243,7 +243,7 @@ def run_all(
     todo = []
     for r in runs:
         if is_complete(out / RUNS_DIR / r.id):
-            ex.records[r.id] = _complete_record(out, r.id, r.params, executed=False)
+            ex.records[r.id] = complete_record(out, r.id, r.params, executed=False)
             ex.skipped += 1
         else:
             todo.append(r)
@@ -298,10 +298,9 @@ def run_all(
                 recs = []
                 for r in part:
                     if is_complete(out / RUNS_DIR / r.id):
-                        recs.append(_complete_record(out, r.id, r.params, executed=True))
+                        recs.append(complete_record(out, r.id, r.params, executed=True))
                     else:
-                        recs.append(_failed(r.id, r.params, msg))
-                        _write_record(out, recs[-1])
+                        recs.append(record_failure(out, r.id, r.params, msg))
             for r, rec in zip(part, recs, strict=True):
                 arrays = rec.pop("arrays", None)
                 if arrays is not None:

@@ -32,9 +32,12 @@ __all__ = [
     "CONFIGS_DIR",
     "LOG_DIR",
     "RUNS_DIR",
+    "complete_record",
     "is_complete",
     "open_study_dir",
     "read_record",
+    "record_failure",
+    "write_record",
 ]
 
 RUNS_DIR = "runs"
@@ -93,7 +96,7 @@ def read_record(out: Path, rid: str) -> dict[str, Any] | None:
     return rec if isinstance(rec, dict) else None
 
 
-def _complete_record(out: Path, rid: str, params: dict[str, Any], executed: bool) -> dict:
+def complete_record(out: Path, rid: str, params: dict[str, Any], executed: bool) -> dict:
     """The record of a run whose directory holds a complete result (its wall time from
     the logged record, if that is there)."""
     old = read_record(out, rid) or {}
@@ -107,12 +110,14 @@ def _complete_record(out: Path, rid: str, params: dict[str, Any], executed: bool
     }
 
 
-def _write_record(out: Path, rec: dict[str, Any]) -> None:
+def write_record(out: Path, rec: dict[str, Any]) -> None:
+    """Log ``rec`` as the record of its run (``OUTDIR/log/<id>.json``)."""
     write_atomic(out / LOG_DIR / f"{rec['id']}.json", json.dumps(rec, indent=2) + "\n")
 
 
-def _failed(rid: str, params: dict[str, Any], msg: str) -> dict[str, Any]:
-    return {
+def record_failure(out: Path, rid: str, params: dict[str, Any], msg: str) -> dict[str, Any]:
+    """Log run ``rid`` as failed with the error ``msg``; returns its record."""
+    rec = {
         "id": rid,
         "params": params,
         "status": "failed",
@@ -121,3 +126,5 @@ def _failed(rid: str, params: dict[str, Any], msg: str) -> dict[str, Any]:
         "executed": True,
         "finished": datetime.now(UTC).isoformat(timespec="seconds"),
     }
+    write_record(out, rec)
+    return rec

@@ -25,10 +25,10 @@ from ..util.atomic import write_atomic
 from .layout import (
     CONFIGS_DIR,
     RUNS_DIR,
-    _complete_record,
-    _failed,
-    _write_record,
+    complete_record,
     is_complete,
+    record_failure,
+    write_record,
 )
 
 __all__ = [
@@ -116,7 +116,7 @@ def run_task(
     }
     _wait_unlocked(rundir)
     if is_complete(rundir):
-        return _complete_record(out, rid, params, executed=False)
+        return complete_record(out, rid, params, executed=False)
     try:
         if not config_path.is_file() or config_path.read_text(encoding="utf-8") != config_text:
             write_atomic(config_path, config_text)
@@ -125,7 +125,7 @@ def run_task(
         note = getattr(exc, "vemwear_note", "")
         raise RunFailed(f"{type(exc).__name__}: {exc}{note}") from None
     rec.update(wall_time=time.perf_counter() - t0, executed=True)
-    _write_record(out, rec)
+    write_record(out, rec)
     if extract is not None and result is not None:
         rec["arrays"] = extract(result)
     return rec
@@ -155,8 +155,7 @@ def run_chunk(
                 break
             except RunFailed as exc:
                 if attempt == retries:
-                    rec = _failed(rid, params, str(exc))
-                    _write_record(Path(outdir), rec)
+                    rec = record_failure(Path(outdir), rid, params, str(exc))
         records.append(rec)
         _tell_progress(rid)
     return records

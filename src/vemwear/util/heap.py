@@ -75,7 +75,7 @@ def small_pages() -> Iterator[None]:
     (``madvise(MADV_HUGEPAGE)``). A result array that a run writes once and hands back
     gains nothing from them, and on a virtual machine the first write into a fresh
     huge page can stall: at 66,048 unknowns, writing u into a new 68 MB result took
-    0.09 s (0.07 s in the kernel) in 15 of 33 runs, against 0.02 s in the others
+    0.09 s (0.07 s in the kernel) in 14 or 15 of 33 runs, against 0.02 s in the others
     (``benchmarks/bench_threads.py --n 128``). With 4 KB pages it takes 0.04 s in
     every run. The switch is NumPy's own (``NUMPY_MADVISE_HUGEPAGE`` sets it at
     start); where this NumPy has none, nothing changes.
