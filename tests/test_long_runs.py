@@ -23,7 +23,7 @@ import pytest
 
 from conftest import small_config
 
-STEPS = 12000  # about 0.5 s of solving on 16 x 8 squares
+STEPS = 50000  # about 0.8 s of solving on 16 x 8 squares (2 cores)
 
 LONG = small_config(
     "long run",
@@ -75,7 +75,7 @@ def reference(config: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[st
 
 #: Steps of the run killed with SIGKILL: long enough (about 2.5 s here) that the kill
 #: lands well inside the time loop on a faster machine too.
-KILL_STEPS = 60000
+KILL_STEPS = 150000
 
 
 @pytest.fixture(scope="module")
@@ -545,7 +545,7 @@ def test_a_mount_point_as_the_output_directory(
 ) -> None:
     """A mount point (a Docker volume) is written into, never renamed or removed: by a
     run, by --force, by a run killed with SIGKILL after a checkpoint and its --resume."""
-    remount(small_disk, "size=64m")
+    remount(small_disk, "size=256m")
     out = small_disk
     done = run(config, out)
     assert done.returncode == 0, done.stderr

@@ -26,16 +26,26 @@ class ComplianceLaw:
     elementwise : bool
         True when ``p`` acts entry by entry on arrays of any shape, the same numbers
         as on each row (then several levels' penetrations are one call).
+    piecewise_linear : bool
+        True when ``p`` is linear on segments and :meth:`segments` gives them (then
+        the step problem is linear on pieces; ``vemwear.solvers.pieces``).
     """
 
     lipschitz: float
     elementwise: ClassVar[bool] = False
+    piecewise_linear: ClassVar[bool] = False
 
     def __call__(self, r: ArrayLike) -> NDArray[np.float64]:  # pragma: no cover - interface
         raise NotImplementedError
 
     def derivative(self, r: ArrayLike) -> NDArray[np.float64]:  # pragma: no cover - interface
         raise NotImplementedError
+
+    def segments(self, r: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The slope ``s`` and offset ``q`` of the segment of each entry of ``r``:
+        ``p = s r + q`` on that segment, ``s`` the derivative :meth:`derivative` gives;
+        the same numbers for every ``r`` of a segment (laws with ``piecewise_linear``)."""
+        raise NotImplementedError  # pragma: no cover - interface
 
     def describe(self) -> dict:  # pragma: no cover - interface
         raise NotImplementedError
@@ -58,6 +68,7 @@ class LinearCompliance(ComplianceLaw):
 
     c: float
     elementwise: ClassVar[bool] = True
+    piecewise_linear: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         if not np.isfinite(self.c) or self.c < 0:
@@ -72,6 +83,10 @@ class LinearCompliance(ComplianceLaw):
 
     def derivative(self, r: ArrayLike) -> NDArray[np.float64]:
         return np.where(np.asarray(r, dtype=float) > 0.0, self.c, 0.0)
+
+    def segments(self, r: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        s = self.derivative(r)
+        return s, np.zeros_like(s)
 
     def describe(self) -> dict:
         return {"type": "linear", "c": self.c}
@@ -101,6 +116,7 @@ class TableCompliance(ComplianceLaw):
     p: tuple[float, ...]
     _slopes: NDArray[np.float64] = field(init=False, repr=False, compare=False)
     elementwise: ClassVar[bool] = True
+    piecewise_linear: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         r = np.asarray(self.r, dtype=float)
@@ -145,6 +161,14 @@ class TableCompliance(ComplianceLaw):
     def derivative(self, r: ArrayLike) -> NDArray[np.float64]:
         r = np.asarray(r, dtype=float)
         return np.where(r > 0.0, self._slopes[self._segment(r)], 0.0)
+
+    def segments(self, r: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        r = np.asarray(r, dtype=float)
+        k = self._segment(r)
+        s = self._slopes[k]
+        q = np.asarray(self.p)[k] - s * np.asarray(self.r)[k]  # p_k - s_k r_k
+        on = r > 0.0
+        return np.where(on, s, 0.0), np.where(on, q, 0.0)
 
     def describe(self) -> dict:
         return {"type": "table", "r": list(self.r), "p": list(self.p)}

@@ -61,7 +61,6 @@ class _Resultants:
     ET: NDArray[np.float64] | None = None
     b: NDArray[np.float64] | None = None
     b_F: Any = None
-    x: NDArray[np.float64] = dataclasses.field(default_factory=lambda: np.zeros(0))
 
 
 class Discretization:
@@ -272,8 +271,19 @@ class Discretization:
     def step_data(self, level: int, w: NDArray[np.float64]) -> StepData:
         """The step problem of a level with the wear ``w`` (= w^n)."""
         t = float(self.problem.time.t[level])
-        w_step = w if self.shift is None else w + self.shift
-        return StepData(F=self.load(t), w=w_step, fric=self._sliding(t).fric, t=t, level=level)
+        return StepData(
+            F=self.load(t), w=self.step_wear(w), fric=self._sliding(t).fric, t=t, level=level
+        )
+
+    def step_wear(self, w: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The wear of the step problem, ``w + shift`` (``w`` itself without a shift)."""
+        return w if self.shift is None else w + self.shift
+
+    @property
+    def steady(self) -> bool:
+        """Whether the load and every part's sliding velocity are the same at all
+        times: then the step problems of all levels differ only in the wear."""
+        return self._constant_load and self._steady_velocity
 
     def alpha(self, t: float) -> NDArray[np.float64]:
         """``alpha(t) = kappa |v*_tau(t)|`` at the contact nodes (2.2 for any Gamma_C)."""
@@ -295,26 +305,41 @@ class Discretization:
         condensed data, without recovering u: ``K_cf u_f = Z^T (F - forces_f)`` with
         ``Z = K_ff^{-1} K_fc E`` computed once. All rows are one affine map of the layer
         forces, built once (:meth:`_resultant_map`): a level costs one (d P, 2m) product."""
+        return self.resultants_run([step], [solution], solver)[0]
+
+    def resultants_run(
+        self, steps: Sequence[StepData], solutions: Sequence[StepSolution], solver: Any
+    ) -> list[NDArray]:
+        """:meth:`resultants` of several levels: their layer forces in one pass, then
+        the product of each level (the same numbers as level by level)."""
         op = self._resultant_map(solver)
-        m = self.contact.m
-        x, w = op.x, self.contact.weights
-        np.add(solution.p_soft, solution.p_rigid, out=x[:m])
-        x[:m] *= w
-        np.multiply(step.fric, solution.p_soft, out=x[m:])
-        x[m:] *= w
-        out = op.A @ x
-        if op.ZT is not None and op.ET is not None:
-            # the reactions' part that the layer forces leave: once per load vector
-            if op.b is None or step.F is not op.b_F or not self._constant_load:
-                con = self.constraints
-                static = -self._external_load(step.t)[con.dofs]
-                if not con.zero:  # K_cc u_c of the prescribed values
-                    static = static + np.asarray(self._K_cc @ con.values(step.t))
-                b = np.zeros(len(out))
-                b[len(out) - len(op.ZT) :] = op.ZT @ step.F + op.ET @ static
-                op.b, op.b_F = b, step.F
-            out += op.b
-        return out.reshape(-1, self.dim)
+        m, w = self.contact.m, self.contact.weights
+        P_soft = np.array([sol.p_soft for sol in solutions])
+        X = np.empty((len(steps), 2 * m))
+        np.add(P_soft, np.array([sol.p_rigid for sol in solutions]), out=X[:, :m])
+        X[:, :m] *= w
+        np.multiply(np.array([st.fric for st in steps]), P_soft, out=X[:, m:])
+        X[:, m:] *= w
+        out = []
+        for j, step in enumerate(steps):
+            f = op.A @ X[j]
+            if op.ZT is not None and op.ET is not None:
+                f += self._static_reactions(op, step, len(f))
+            out.append(f.reshape(-1, self.dim))
+        return out
+
+    def _static_reactions(self, op: _Resultants, step: StepData, rows: int) -> NDArray:
+        """The reactions' part that the layer forces leave, computed once per load."""
+        if op.b is None or step.F is not op.b_F or not self._constant_load:
+            assert op.ZT is not None and op.ET is not None
+            con = self.constraints
+            static = -self._external_load(step.t)[con.dofs]
+            if not con.zero:  # K_cc u_c of the prescribed values
+                static = static + np.asarray(self._K_cc @ con.values(step.t))
+            b = np.zeros(rows)
+            b[rows - len(op.ZT) :] = op.ZT @ step.F + op.ET @ static
+            op.b, op.b_F = b, step.F
+        return op.b
 
     def _resultant_map(self, solver: Any) -> _Resultants:
         """The affine map of :meth:`resultants`, built once. Its rows: each contact
@@ -332,7 +357,7 @@ class Discretization:
             A_c[cb.part, c, 0, np.arange(m)] = -cb.normals[:, c]
             A_c[cb.part, c, 1, np.arange(m)] = -cb.tangents[:, c]
         A = A_c.reshape(P * d, 2 * m)
-        op = _Resultants(A=A, x=np.zeros(2 * m))
+        op = _Resultants(A=A)
         if con.parts:
             s = self.system
             cols = con.owner * d + con.dofs % d  # (part, component) of each constrained dof

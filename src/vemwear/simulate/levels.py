@@ -12,6 +12,7 @@ same numbers, bitwise, as one that never stopped.
 from __future__ import annotations
 
 import time
+from collections import deque
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
@@ -185,6 +186,36 @@ def run_levels(
         c, w_, g_ = now
         return LoopState(c, w_, g_, [Pending(n_, wn, so) for n_, wn, _, so in pending if n_ < c])
 
+    def wear_next(n_: int, w_: Any, p_soft: Any) -> Any:
+        """w^{n+1} (3.22), the left rectangle rule."""
+        with np.errstate(all="ignore"):
+            return w_ + (tgrid[n_ + 1] - tgrid[n_]) * d.alpha(float(tgrid[n_])) * p_soft
+
+    # Steady data and a piecewise-linear law: runs of levels on one piece of the step
+    # problem, certified together (solvers/pieces.py); each level the same numbers as
+    # in any other run, so a resumed run stays bitwise the same
+    predict: Any = getattr(step_solver, "predict", None)
+    if not (d.steady and getattr(sysm.p, "piecewise_linear", False)):
+        predict = None
+    # (step data, solution, w^{n+1} or None) of the predicted levels not yet handed on
+    ahead: deque[tuple[StepData, StepSolution, Any]] = deque()
+
+    def predicted(n_: int, w_: Any, guess_: StepSolution) -> None:
+        ws = [w_]
+
+        def advance(p_soft: Any) -> Any:
+            ws.append(wear_next(n_ + len(ws) - 1, ws[-1], p_soft))
+            return d.step_wear(ws[-1])
+
+        run = predict(guess_, d.step_data(n_, w_), advance, L - n_, tgrid)
+        if run:
+            steps, sols = zip(*run, strict=True)
+            forces = d.resultants_run(steps, sols, step_solver)
+            for sol_, f in zip(sols, forces, strict=True):
+                sol_.forces = f
+            # w^{n+1} of every level but the run's last (ws holds those of levels tried)
+            ahead.extend(zip(steps, sols, [*ws[1:], None], strict=False))
+
     t2 = time.perf_counter()
     last_checkpoint = time.monotonic()
     try:
@@ -195,10 +226,17 @@ def run_levels(
             levels = tqdm(levels, desc="time levels", unit="lvl", leave=False)
         for n in levels:
             _, w, guess = now
-            step = d.step_data(n, w)
             store_here = slot[n] >= 0
-            sol = step_solver.solve(step, guess, recover=store_here and not batch)
-            sink.level(n, w, d.physical(sol, step, step_solver))
+            if predict is not None and guess is not None and not ahead:
+                predicted(n, w, guess)
+            if ahead:  # forces set already
+                step, sol, w_after = ahead.popleft()
+                sink.level(n, w, d.physical(sol))
+            else:
+                w_after = None
+                step = d.step_data(n, w)
+                sol = step_solver.solve(step, guess, recover=store_here and not batch)
+                sink.level(n, w, d.physical(sol, step, step_solver))
             if store_here:
                 if sol.u is not None:
                     give(n, d.full_dofs(sol.u, step.t), None)
@@ -207,9 +245,8 @@ def run_levels(
             if callback is not None:
                 callback(n, sol)
             w_next = w
-            if n + 1 < L:  # wear update (3.22), left rectangle rule
-                with np.errstate(all="ignore"):
-                    w_next = w + (tgrid[n + 1] - tgrid[n]) * d.alpha(step.t) * sol.p_soft
+            if n + 1 < L:  # wear update (3.22)
+                w_next = wear_next(n, w, sol.p_soft) if w_after is None else w_after
                 if not np.isfinite(w_next).all():
                     raise _wear_overflow(problem, n, w_next)
             now = (n + 1, w_next, sol)

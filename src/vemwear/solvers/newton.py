@@ -17,6 +17,7 @@ nodes into an active set (``N u = g``) and an inactive set (``p_rigid = 0``), an
 from __future__ import annotations
 
 import contextlib
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,6 +26,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .backends import factorize, schur_factorize
+from .pieces import PiecePredictor
 from .system import (
     _TINY,
     RESIDUAL_NAMES,
@@ -141,23 +143,24 @@ class CondensedNewton:
             self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
         w = system.weights
         self.A_norm = self.C_NN * w[None, :]
-        self._T = self.C_NT * w[None, :]
-        self._H = np.hstack([self.C_NN, self.C_NT])  # one product per iteration
+        self.T_fric = self.C_NT * w[None, :]  # C_NT W (times Fric: T_fric Fric)
+        self.H = np.hstack([self.C_NN, self.C_NT])  # one product per iteration
         self._x = np.zeros(2 * m)  # work arrays of the iteration, and views of their halves
         self._x_n, self._x_t = self._x[:m], self._x[m:]
         self._buf = np.zeros(2 * m)
         self._zeros = np.zeros(m)
         self._zeros.setflags(write=False)
         self._wf: tuple[NDArray | None, NDArray] = (None, w)  # (fric, weights * fric)
-        self._inv_g_ref = 1.0 / max(float(np.abs(system.g).max()), _TINY)
+        self.inv_g_ref = 1.0 / max(float(np.abs(system.g).max()), _TINY)
         self._reduced: _ReducedMatrix | None = None
+        self._predictor: PiecePredictor | None = None
         self._F: NDArray | None = None
         self._d: NDArray | None = None
         self._rhs = np.empty((system.n_free, 0), order="F")  # work array of recover_many
         # large dense products and LU factorizations run with one BLAS pool
         self._threads = solver_threads if m >= 128 else contextlib.nullcontext
 
-    def _normal_displacement_of_load(self, F: NDArray) -> NDArray:
+    def normal_displacement(self, F: NDArray) -> NDArray:
         """``d = N K^{-1} F``, solved again only for a new load (the same array object,
         as a constant load gives, is recognised without looking at its entries)."""
         if F is not self._F:
@@ -165,6 +168,14 @@ class CondensedNewton:
                 self._d = self.system.N @ self.factor.solve(F)
             self._F = F
         return self._d  # type: ignore[return-value]
+
+    def reduced_matrix(self, active: NDArray, dp: NDArray, fric: NDArray) -> _ReducedMatrix:
+        """The LU factors of the reduced Newton matrix of this active set, slopes and
+        friction: the kept ones while they stay the same."""
+        red = self._reduced
+        if red is None or not red.matches(active, dp, fric):
+            red = self._reduced = _ReducedMatrix(self.A_norm, self.T_fric, active, dp, fric)
+        return red
 
     def recover_many(
         self,
@@ -202,6 +213,22 @@ class CondensedNewton:
         rhs[s.contact_cols] -= NT @ P + TT @ Q
         return self.factor.solve(rhs, out=out)
 
+    def predict(
+        self,
+        guess: StepSolution,
+        step: StepData,
+        advance: Callable[[NDArray], NDArray],
+        limit: int,
+        times: Sequence[float] | NDArray,
+    ) -> list[tuple[StepData, StepSolution]]:
+        """Levels from ``step`` on, on the piece Newton sees from ``guess``, certified
+        by Newton's exit test (:class:`.pieces.PiecePredictor`; for piecewise-linear
+        laws, a constant load and steady sliding)."""
+        if self._predictor is None:
+            self._predictor = PiecePredictor(self)
+        with self._threads():
+            return self._predictor(guess, step, advance, limit, times)
+
     def solve(
         self, step: StepData, guess: StepSolution | None = None, recover: bool = True
     ) -> StepSolution:
@@ -235,17 +262,17 @@ class CondensedNewton:
         iterate, these prescribed parts are zero and the right-hand side is ``-R``.
         """
         s, opt = self.system, self.options
-        d = self._normal_displacement_of_load(step.F)
+        d = self.normal_displacement(step.F)
         g, c_ncp, wear, fric, law = s.g, s.c_ncp, step.w, step.fric, s.p
         if guess is not None:
             y, p_rigid = np.array(guess.u_nu, copy=True), np.array(guess.p_rigid, copy=True)
         else:
             y, p_rigid = np.minimum(d, g), np.zeros(s.m)
-        w, H, x, x_n, x_t, buf = s.weights, self._H, self._x, self._x_n, self._x_t, self._buf
+        w, H, x, x_n, x_t, buf = s.weights, self.H, self._x, self._x_n, self._x_t, self._buf
         if self._wf[0] is not fric:  # the steps of a steady v* share one fric array
             self._wf = (fric, w * fric)
         wf = self._wf[1]
-        inv_g = self._inv_g_ref
+        inv_g = self.inv_g_ref
         stop = 0.1 * opt.tol
         it = 0
         while True:
@@ -263,9 +290,7 @@ class CondensedNewton:
             it += 1
             active = p_rigid + c_ncp * (y - g) > 0.0
             dp = law.derivative(r)
-            red = self._reduced
-            if red is None or not red.matches(active, dp, fric):
-                red = self._reduced = _ReducedMatrix(self.A_norm, self._T, active, dp, fric)
+            red = self.reduced_matrix(active, dp, fric)
             # no active node (the body off the rigid layer, the usual case): the masks
             # give dy_A = 0 and dp_I = p_rigid, without the array passes
             any_active = np.count_nonzero(active) > 0
