@@ -75,7 +75,8 @@ def _floor(problem) -> float:
 
     d = problem.discrete
     newton = d.step_solver(SolverOptions("newton"))
-    piece = newton._predictor._piece  # noqa: SLF001 - the benchmark reads the solver's state
+    piece = newton.predictor.piece  # the last piece of the runs
+    assert piece is not None
     M, c0, red, law = piece.M, piece.c0, piece.red, d.system.p
     rate = (problem.time.t[1] - problem.time.t[0]) * d.alpha(0.0)
     w = np.zeros(d.system.m)

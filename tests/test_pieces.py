@@ -167,3 +167,21 @@ def test_segments_of_the_laws() -> None:
     s, q = TABLE.segments(np.array([0.021, 0.03, 0.049]))
     assert len(set(s.tolist())) == 1 and len(set(q.tolist())) == 1
     assert not as_callable(TABLE).piecewise_linear and TABLE.piecewise_linear
+
+
+def test_reciprocating_sliding_runs_while_the_friction_stays(monkeypatch) -> None:
+    """v*(t) = (cos 2 pi t, 0): the friction turns at t = 1/4 and 3/4, the wear rate
+    changes at every level; runs go on while the friction stays the same."""
+
+    def v_star(t: float) -> tuple[float, float]:
+        return (float(np.cos(2 * np.pi * t)), 0.0)
+
+    pr = dataclasses.replace(problem(LinearCompliance(0.4), steps=128), v_star=v_star)
+    ref = simulate(dataclasses.replace(pr, p=as_callable(pr.p)))
+    solved = newton_levels(monkeypatch)
+    got = simulate(pr)
+    assert 2 <= len(solved) <= 16, solved
+    np.testing.assert_array_equal(got.iterations, ref.iterations)
+    for k in FIELDS:
+        a, b = getattr(got, k), getattr(ref, k)
+        assert np.abs(a - b).max() <= 1e-12 * np.abs(b).max(), k

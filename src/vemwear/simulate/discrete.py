@@ -280,10 +280,20 @@ class Discretization:
         return w if self.shift is None else w + self.shift
 
     @property
-    def steady(self) -> bool:
-        """Whether the load and every part's sliding velocity are the same at all
-        times: then the step problems of all levels differ only in the wear."""
-        return self._constant_load and self._steady_velocity
+    def constant_load(self) -> bool:
+        """Whether the load ``F`` of the step problems is the same at all times (then
+        :meth:`load` gives one array object)."""
+        return self._constant_load
+
+    @property
+    def steady_sliding(self) -> bool:
+        """Whether every part's v* is one constant vector (then the friction and wear
+        rate of every level are the same array objects)."""
+        return self._steady_velocity
+
+    def friction(self, t: float) -> NDArray[np.float64]:
+        """``mu n*.tau`` at the contact nodes at time t (the step data's ``fric``)."""
+        return self._sliding(t).fric
 
     def alpha(self, t: float) -> NDArray[np.float64]:
         """``alpha(t) = kappa |v*_tau(t)|`` at the contact nodes (2.2 for any Gamma_C)."""

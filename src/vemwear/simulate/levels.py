@@ -191,23 +191,30 @@ def run_levels(
         with np.errstate(all="ignore"):
             return w_ + (tgrid[n_ + 1] - tgrid[n_]) * d.alpha(float(tgrid[n_])) * p_soft
 
-    # Steady data and a piecewise-linear law: runs of levels on one piece of the step
-    # problem, certified together (solvers/pieces.py); each level the same numbers as
-    # in any other run, so a resumed run stays bitwise the same
+    # A constant load and a piecewise-linear law: runs of levels on one piece of the
+    # step problem, certified together (solvers/pieces.py), as long as the friction
+    # stays the same; each level has the same numbers as in any other run, so a
+    # resumed run stays bitwise the same
     predict: Any = getattr(step_solver, "predict", None)
-    if not (d.steady and getattr(sysm.p, "piecewise_linear", False)):
+    if not (d.constant_load and getattr(sysm.p, "piecewise_linear", False)):
         predict = None
     # (step data, solution, w^{n+1} or None) of the predicted levels not yet handed on
     ahead: deque[tuple[StepData, StepSolution, Any]] = deque()
 
     def predicted(n_: int, w_: Any, guess_: StepSolution) -> None:
+        first = d.step_data(n_, w_)
         ws = [w_]
 
         def advance(p_soft: Any) -> Any:
-            ws.append(wear_next(n_ + len(ws) - 1, ws[-1], p_soft))
+            n_next = n_ + len(ws)
+            ws.append(wear_next(n_next - 1, ws[-1], p_soft))  # v* at t_{n_next - 1}
+            if not d.steady_sliding and not np.array_equal(
+                d.friction(float(tgrid[n_next])), first.fric
+            ):
+                return None  # the friction changes: the run ends here
             return d.step_wear(ws[-1])
 
-        run = predict(guess_, d.step_data(n_, w_), advance, L - n_, tgrid)
+        run = predict(guess_, first, advance, L - n_, tgrid)
         if run:
             steps, sols = zip(*run, strict=True)
             forces = d.resultants_run(steps, sols, step_solver)

@@ -217,17 +217,22 @@ class CondensedNewton:
         self,
         guess: StepSolution,
         step: StepData,
-        advance: Callable[[NDArray], NDArray],
+        advance: Callable[[NDArray], NDArray | None],
         limit: int,
         times: Sequence[float] | NDArray,
     ) -> list[tuple[StepData, StepSolution]]:
         """Levels from ``step`` on, on the piece Newton sees from ``guess``, certified
         by Newton's exit test (:class:`.pieces.PiecePredictor`; for piecewise-linear
-        laws, a constant load and steady sliding)."""
+        laws and a constant load, while the friction stays the same)."""
+        with self._threads():
+            return self.predictor(guess, step, advance, limit, times)
+
+    @property
+    def predictor(self) -> PiecePredictor:
+        """The runs of levels on one piece (made at the first use)."""
         if self._predictor is None:
             self._predictor = PiecePredictor(self)
-        with self._threads():
-            return self._predictor(guess, step, advance, limit, times)
+        return self._predictor
 
     def solve(
         self, step: StepData, guess: StepSolution | None = None, recover: bool = True

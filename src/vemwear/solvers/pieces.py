@@ -1,7 +1,7 @@
 """Runs of levels on one piece of the condensed step problem, certified together.
 
 For a compliance law that is linear on segments (``law.piecewise_linear``), a
-constant load and a steady friction direction, the condensed step problem of
+constant load and the same friction direction, the condensed step problem of
 :class:`~vemwear.solvers.newton.CondensedNewton` (paper 3.21 after eliminating u) is
 linear on each *piece*: a fixed active set A of the rigid layer and a fixed segment
 ``p = D r + q`` of the law at every node. On a piece its solution is an affine
@@ -43,7 +43,7 @@ from .system import RESIDUAL_NAMES, StepData, StepSolution
 if TYPE_CHECKING:
     from .newton import CondensedNewton
 
-__all__ = ["FIRST_RUN", "PiecePredictor", "block_width"]
+__all__ = ["FIRST_RUN", "Piece", "PiecePredictor", "block_width"]
 
 #: Levels of a first run, and of a run after one cut short by a change of piece.
 FIRST_RUN = 8
@@ -56,13 +56,13 @@ def block_width(m: int) -> int:
     return int(min(64, max(1, 2**21 // max(m * m, 1))))
 
 
-class _Piece:
+class Piece:
     """The affine map of one piece, wear -> (y, p_rigid): the LU factors of J (Newton's
     reduced matrix of the piece), ``M`` and ``c0``."""
 
     def __init__(self, newton: CondensedNewton, d, active, slope, offset, fric) -> None:
-        self.key = (active.tobytes(), slope.tobytes(), offset.tobytes())
-        self.fric, self.d = fric, d
+        self.key = (active.tobytes(), slope.tobytes(), offset.tobytes(), fric.tobytes())
+        self.d = d
         self.active, self.slope, self.offset = active, slope, offset
         self.any_active = bool(active.any())
         self.red = newton.reduced_matrix(active, slope, fric)
@@ -76,11 +76,12 @@ class _Piece:
         self.c0 = c0
 
     def matches(self, active, slope, offset, fric, d) -> bool:
-        # a steady sliding direction and a constant load keep their arrays
-        return (
-            fric is self.fric
-            and d is self.d
-            and self.key == (active.tobytes(), slope.tobytes(), offset.tobytes())
+        # a constant load keeps its array d
+        return d is self.d and self.key == (
+            active.tobytes(),
+            slope.tobytes(),
+            offset.tobytes(),
+            fric.tobytes(),
         )
 
 
@@ -92,7 +93,8 @@ class PiecePredictor:
     def __init__(self, newton: CondensedNewton) -> None:
         self.newton = newton
         self.width = block_width(newton.system.m)
-        self._piece: _Piece | None = None
+        #: the piece of the last run
+        self.piece: Piece | None = None
         # levels the next run tries: doubled after a whole run is accepted, back to
         # FIRST_RUN after a run cut short (a piece change costs the levels tried past it)
         self._run = FIRST_RUN
@@ -102,7 +104,7 @@ class PiecePredictor:
         self,
         guess: StepSolution,
         step: StepData,
-        advance: Callable[[NDArray[np.float64]], NDArray[np.float64]],
+        advance: Callable[[NDArray[np.float64]], NDArray[np.float64] | None],
         limit: int,
         times: Sequence[float] | NDArray[np.float64],
     ) -> list[tuple[StepData, StepSolution]]:
@@ -115,11 +117,12 @@ class PiecePredictor:
             The solution of the level before ``step``.
         step : StepData
             The first level; its load and friction stay for the whole run (the caller
-            asks only for a constant load and a steady sliding direction).
+            asks only for a constant load).
         advance : callable
             ``advance(p_soft)``, the wear ``w`` of the next level's step data from
-            this level's soft pressure (the scheme's wear update); called for all but
-            the last level of the run.
+            this level's soft pressure (the scheme's wear update), or None where the
+            next level's friction is not that of ``step`` (the run ends there);
+            called for all but the last level of the run.
         limit : int
             Levels to predict at most. A run also stops before the next multiple of
             :attr:`width`; it tries :data:`FIRST_RUN` levels after a run cut short,
@@ -143,14 +146,19 @@ class PiecePredictor:
         y0, w = guess.u_nu, step.w
         active = guess.p_rigid + c_ncp * (y0 - g) > 0.0  # Newton's first iteration
         slope, offset = law.segments(y0 - w)
-        piece = self._piece
+        piece = self.piece
         if piece is None or not piece.matches(active, slope, offset, fric, d):
-            piece = self._piece = _Piece(newton, d, active, slope, offset, fric)
+            piece = self.piece = Piece(newton, d, active, slope, offset, fric)
         M, c0, red = piece.M, piece.c0, piece.red
         Y, P, S, Wr = (np.empty((count, m)) for _ in range(4))
         for j in range(count):
             if j:
-                w = advance(S[j - 1])
+                w_next = advance(S[j - 1])
+                if w_next is None:  # the step data change beyond the wear
+                    Y, P, S, Wr = Y[:j], P[:j], S[:j], Wr[:j]
+                    count = j
+                    break
+                w = w_next
             Wr[j] = w
             b = M @ w
             b += c0
@@ -185,7 +193,7 @@ class PiecePredictor:
             for j in range(k)
         ]
 
-    def _same_piece(self, Y, P_plus, Wr, piece: _Piece) -> NDArray[np.bool_]:
+    def _same_piece(self, Y, P_plus, Wr, piece: Piece) -> NDArray[np.bool_]:
         """Whether Newton, started from level j - 1's solution with level j's wear,
         sees the piece of the run (true for the first level by construction)."""
         s = self.newton.system
