@@ -9,9 +9,7 @@ same stiffness right after it: assembly + the backend's factorization with its S
 block + the block solves the run needs (65 right-hand sides in blocks of 32) + one
 solve for the load. The ratio whole / floor is the overhead of everything else.
 
-``--steps``: the per-level time of the time loop at 32 x 16 cells and 2000 levels
-(store "final"), split into the step solver's solve and the rest (the loop's own
-overhead: step data, sinks, wear update, resultants).
+The time loop per level: ``benchmarks/bench_levels.py``.
 
 ``--example-5-5``, ``--n512``, ``--voronoi``: whole processes, wall time and peak memory
 of the child: ``vemwear example 5.5`` (its reference solution computed, not read from a
@@ -22,7 +20,6 @@ levels, u at 5 levels; figures and ParaView output off).
 Usage::
 
     python benchmarks/bench_speed.py --reference --backends pardiso scipy --repeat 3
-    python benchmarks/bench_speed.py --steps --repeat 5
     python benchmarks/bench_speed.py --example-5-5 --n512 --voronoi --repeat 2
 """
 
@@ -121,43 +118,6 @@ def reference_table(n: int, backends: list[str], repeat: int) -> None:
     if len(wear) > 1:
         vals = list(wear.values())
         print(f"max wear at T: {vals[0]:.12g}; backends differ by {max(vals) - min(vals):.1e}")
-
-
-def steps_table(repeat: int) -> None:
-    from vemwear.simulate import SolverOptions, simulate
-
-    pr = _problem(16, steps=2000)
-    opts = SolverOptions("newton", backend="scipy")
-    simulate(pr, opts, store="final")  # assembly and factorization once
-    solver = pr.discrete.step_solver(opts)
-    inner = solver.solve
-    spent = [0.0]
-
-    def timed(*a, **k):
-        t = time.perf_counter()
-        out = inner(*a, **k)
-        spent[0] += time.perf_counter() - t
-        return out
-
-    solver.solve = timed
-    tot, sol, rest = [], [], []
-    for _ in range(repeat):
-        spent[0] = 0.0
-        t = time.perf_counter()
-        simulate(pr, opts, store="final")
-        dt = time.perf_counter() - t
-        L = len(pr.time.t)
-        tot.append(1e3 * dt / L)
-        sol.append(1e3 * spent[0] / L)
-        rest.append(1e3 * (dt - spent[0]) / L)
-    solver.solve = inner
-    print("time loop per level at 32 x 16, 2001 levels (ms, min med max)")
-    print(f"{'whole':>22} | {'step solver':>22} | {'loop overhead':>22}")
-    print(f"{_stats3(tot):>22} | {_stats3(sol):>22} | {_stats3(rest):>22}")
-
-
-def _stats3(v: list[float]) -> str:
-    return f"{min(v):6.3f} {statistics.median(v):6.3f} {max(v):6.3f}"
 
 
 def _child(cmd: list[str]) -> tuple[float, float, int]:
@@ -275,7 +235,6 @@ def main() -> None:
     ap.add_argument("--reference", action="store_true")
     ap.add_argument("--n", type=int, default=256)
     ap.add_argument("--backends", nargs="+", default=["pardiso", "scipy"])
-    ap.add_argument("--steps", action="store_true")
     ap.add_argument("--example-5-5", action="store_true")
     ap.add_argument("--n512", action="store_true")
     ap.add_argument("--voronoi", action="store_true")
@@ -287,8 +246,6 @@ def main() -> None:
     keep_freed_memory()  # in-process runs as in the command line's process
     if args.reference:
         reference_table(args.n, args.backends, args.repeat)
-    if args.steps:
-        steps_table(args.repeat)
     if args.example_5_5 or args.n512 or args.voronoi:
         processes_table(args.example_5_5, args.n512, args.voronoi, args.repeat)
 

@@ -19,10 +19,10 @@ before (the active set of the previous solution and the segments of ``y^{n-1} - 
 :class:`PiecePredictor` computes a run of levels on the piece of its first level from
 the wear recurrence alone (one product and one solve with the kept LU factors per
 level), then checks the whole run at once: that each level's piece is the one Newton
-would see from the level before, and Newton's own exit test, the condensed residuals
-with the true law (:func:`~vemwear.solvers.newton._condensed_errors`, one matrix
-product for the run). The accepted levels are the leading ones that pass both; the
-first level that fails is left to Newton.
+would see from the level before, and Newton's own exit test, the three condensed
+residuals with the true law at most ``tol / 10`` (one matrix product for the run).
+The accepted levels are the leading ones that pass both; the first level that fails
+is left to Newton.
 
 Each accepted level is therefore a function of the previous solution and its wear
 alone, whatever run it was computed in: the residual products are taken in a block of
@@ -209,10 +209,11 @@ class PiecePredictor:
         return ok
 
     def _errors(self, d, fric, Y, P, S, first: int) -> NDArray[np.float64]:
-        """The condensed residuals of Newton's exit test, (k, 3), of the rows of Y,
-        P (p_rigid before clamping) and S (p_soft), as in
-        :func:`~vemwear.solvers.newton.condensed_errors`: the products with H in a
-        block of :attr:`width` columns, row j in column ``first + j``."""
+        """The three condensed residuals of Newton's exit test, (k, 3), of the rows of
+        Y, P (p_rigid before clamping) and S (p_soft), by the formulas of Newton's
+        (equilibrium max |R| / g_ref; feasibility and complementarity of p_rigid and
+        g - y): the products with H in a block of :attr:`width` columns, row j in
+        column ``first + j``."""
         newton = self.newton
         s = newton.system
         k, m = Y.shape
