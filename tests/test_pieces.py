@@ -16,7 +16,7 @@ from vemwear.contact import CallableCompliance, LinearCompliance, TableComplianc
 from vemwear.mesh import rectangle_squares, tag_rectangle
 from vemwear.simulate import Problem, TimeGrid, simulate
 from vemwear.solvers.newton import CondensedNewton
-from vemwear.solvers.pieces import block_width
+from vemwear.solvers.pieces import MIN_WIDTH, block_width
 from vemwear.vem import Material
 
 FIELDS = ("wear", "u_nu", "p_rigid", "p_soft", "u", "forces")
@@ -185,3 +185,15 @@ def test_reciprocating_sliding_runs_while_the_friction_stays(monkeypatch) -> Non
     for k in FIELDS:
         a, b = getattr(got, k), getattr(ref, k)
         assert np.abs(a - b).max() <= 1e-12 * np.abs(b).max(), k
+
+
+def test_many_contact_nodes_are_left_to_newton(monkeypatch) -> None:
+    """Above 362 contact nodes a residual block would hold fewer than MIN_WIDTH levels:
+    Newton solves every level, whose products cost as much as a run's."""
+    assert block_width(362) >= MIN_WIDTH > block_width(363)
+    mesh = tag_rectangle(rectangle_squares((2.0, 1.0), (400, 50)))
+    pr = dataclasses.replace(problem(LinearCompliance(0.4), steps=8), mesh=mesh)
+    assert not CondensedNewton(pr.discrete.system).predicts
+    solved = newton_levels(monkeypatch)
+    simulate(pr)
+    assert solved == list(range(9))

@@ -2,11 +2,13 @@
 
 :func:`run_levels` solves the step problem (3.21) of each level with ``w^n`` fixed,
 hands the level to a :class:`~vemwear.simulate.stream.LevelSink`, and updates the
-wear by the left rectangle rule (3.22). It keeps only the state of the last level
-(:class:`~vemwear.simulate.stream.LoopState`), so its memory does not depend on the
-number of levels. Every ``checkpoint`` seconds it asks the sink to make the levels so
-far durable together with that state; a run started again from the state gives the
-same numbers, bitwise, as one that never stopped.
+wear by the left rectangle rule (3.22). With the condensed Newton solver, a
+piecewise-linear law and a constant load, levels come in runs on one piece of the
+step problem, certified together (:mod:`vemwear.solvers.pieces`). It keeps only the
+state of the last level (:class:`~vemwear.simulate.stream.LoopState`), so its memory
+does not depend on the number of levels. Every ``checkpoint`` seconds it asks the
+sink to make the levels so far durable together with that state; a run started again
+from the state gives the same numbers, bitwise, as one that never stopped.
 """
 
 from __future__ import annotations
@@ -191,12 +193,12 @@ def run_levels(
         with np.errstate(all="ignore"):
             return w_ + (tgrid[n_ + 1] - tgrid[n_]) * d.alpha(float(tgrid[n_])) * p_soft
 
-    # A constant load and a piecewise-linear law: runs of levels on one piece of the
-    # step problem, certified together (solvers/pieces.py), as long as the friction
-    # stays the same; each level has the same numbers as in any other run, so a
-    # resumed run stays bitwise the same
+    # A constant load and a solver that predicts (a piecewise-linear law): runs of
+    # levels on one piece of the step problem, certified together (solvers/pieces.py),
+    # as long as the friction stays the same; each level has the same numbers as in
+    # any other run, so a resumed run stays bitwise the same
     predict: Any = getattr(step_solver, "predict", None)
-    if not (d.constant_load and getattr(sysm.p, "piecewise_linear", False)):
+    if not (d.constant_load and getattr(step_solver, "predicts", False)):
         predict = None
     # (step data, solution, w^{n+1} or None) of the predicted levels not yet handed on
     ahead: deque[tuple[StepData, StepSolution, Any]] = deque()

@@ -26,7 +26,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .backends import factorize, schur_factorize
-from .pieces import PiecePredictor
+from .pieces import MIN_WIDTH, PiecePredictor, block_width
 from .system import (
     _TINY,
     RESIDUAL_NAMES,
@@ -143,7 +143,7 @@ class CondensedNewton:
             self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
         w = system.weights
         self.A_norm = self.C_NN * w[None, :]
-        self.T_fric = self.C_NT * w[None, :]  # C_NT W (times Fric: T_fric Fric)
+        self.T_fric = self.C_NT * w[None, :]  # C_NT W: the friction term is T_fric Fric
         self.H = np.hstack([self.C_NN, self.C_NT])  # one product per iteration
         self._x = np.zeros(2 * m)  # work arrays of the iteration, and views of their halves
         self._x_n, self._x_t = self._x[:m], self._x[m:]
@@ -226,6 +226,15 @@ class CondensedNewton:
         laws and a constant load, while the friction stays the same)."""
         with self._threads():
             return self.predictor(guess, step, advance, limit, times)
+
+    @property
+    def predicts(self) -> bool:
+        """Whether :meth:`predict` pays: a piecewise-linear law and at most 362 contact
+        nodes (:data:`.pieces.MIN_WIDTH`)."""
+        law = self.system.p
+        return bool(getattr(law, "piecewise_linear", False)) and (
+            block_width(self.system.m) >= MIN_WIDTH
+        )
 
     @property
     def predictor(self) -> PiecePredictor:

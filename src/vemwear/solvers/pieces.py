@@ -43,17 +43,23 @@ from .system import RESIDUAL_NAMES, StepData, StepSolution
 if TYPE_CHECKING:
     from .newton import CondensedNewton
 
-__all__ = ["FIRST_RUN", "Piece", "PiecePredictor", "block_width"]
+__all__ = ["FIRST_RUN", "MIN_WIDTH", "Piece", "PiecePredictor", "block_width"]
 
 #: Levels of a first run, and of a run after one cut short by a change of piece.
 FIRST_RUN = 8
 
 
+#: The fewest columns of a residual block with which runs pay: below, with more than
+#: 362 contact nodes, Newton's levels are bound by BLAS products and cost no more than
+#: a run's (1/256 and 1/512 in Example 5.5: the same or 15-20 % longer with runs).
+MIN_WIDTH = 4
+
+
 def block_width(m: int) -> int:
     """Columns of the residual block for m contact nodes: up to 64 levels in one
-    product, fewer for large m so that the product (2 m^2 per column) stays cheap
-    next to the per-level work of Newton it replaces."""
-    return int(min(64, max(1, 2**21 // max(m * m, 1))))
+    product, fewer for large m so that the product (2 m^2 flops a column, whatever
+    the run's length) stays below 2^20 flops."""
+    return int(min(64, max(1, 2**19 // max(m * m, 1))))
 
 
 class Piece:
