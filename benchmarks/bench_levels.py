@@ -42,23 +42,11 @@ def _stats(v: list[float]) -> str:
 
 
 def _problem(nx: int, levels: int):
-    from vemwear.contact import LinearCompliance
-    from vemwear.mesh import rectangle_squares, tag_rectangle
-    from vemwear.simulate import Problem, TimeGrid
-    from vemwear.vem import Material
+    from vemwear.paper import ex52
+    from vemwear.simulate import TimeGrid
 
-    mesh = tag_rectangle(rectangle_squares((2.0, 1.0), (nx, nx // 2)))
-    return Problem(
-        mesh,
-        Material(4.0, 4.0),
-        TimeGrid.uniform(levels / 64, levels),
-        f1=(0.0, -0.06),
-        p=LinearCompliance(0.4),
-        g=0.1,
-        mu=0.2,
-        kappa=2.0,
-        v_star=(1.0, 0.0),
-    )
+    pr = ex52.problem(0.2, 2.0, divisions=(nx, nx // 2))  # data set 1
+    return dataclasses.replace(pr, time=TimeGrid.uniform(levels / 64, levels))
 
 
 def _loop(problem) -> tuple[float, np.ndarray]:
