@@ -95,22 +95,25 @@ def madvise_switch():
     switch(before)
 
 
-def test_small_pages_allocates_result_arrays_without_huge_pages(madvise_switch) -> None:
-    """Arrays made inside ``small_pages`` get no transparent huge pages where NumPy's
-    madvise would have given them some; NumPy's switch is restored afterwards."""
+def test_small_zeros_are_in_small_pages_also_in_advised_heap_memory(madvise_switch) -> None:
+    """A ``small_zeros`` array gets no transparent huge pages, also where freed memory is
+    kept and the heap holds memory NumPy advised for huge pages before (the case that
+    turning NumPy's request off did not cover)."""
     import numpy as np
 
-    from vemwear.util.heap import small_pages
+    from vemwear.util.heap import keep_freed_memory, small_zeros
 
-    outside = np.zeros(2**23)  # 64 MB, written: its pages exist
-    outside[:] = 1.0
-    if _huge_kb(outside.ctypes.data + outside.nbytes // 2) == 0:
+    keep_freed_memory()
+    advised = np.zeros(2**21)  # 16 MB from the heap, advised by NumPy, written
+    advised[:] = 1.0
+    if _huge_kb(advised.ctypes.data + advised.nbytes // 2) == 0:
         pytest.skip("the kernel gave no huge pages to a madvised array")
-    with small_pages():
-        made = np.zeros(2**23)
+    del advised
+    made = small_zeros((2**10, 2**11))  # NumPy's zeros would reuse that heap memory
+    assert made.shape == (2**10, 2**11) and made.flags.writeable and not made.any()
     made[:] = 1.0
     assert _huge_kb(made.ctypes.data + made.nbytes // 2) == 0
-    assert madvise_switch(True) is True  # restored
+    assert small_zeros(10).base is None  # small arrays: plain NumPy zeros
 
 
 def test_simulate_writes_u_into_small_pages(madvise_switch) -> None:

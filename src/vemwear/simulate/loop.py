@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..solvers import StepSolution
-from ..util.heap import keep_freed_memory, small_pages
+from ..util.heap import keep_freed_memory, small_zeros
 from .levels import RESIDUAL_NAMES, run_levels
 from .options import SolverOptions
 from .problem import Problem
@@ -261,28 +261,27 @@ class MemorySink:
         K, m, nv = len(plan.levels), d.system.m, problem.mesh.n_points
         self.row, self.slot = plan.slots()
         # the result's arrays are written once and handed back: 4 KB pages fault steadily
-        with small_pages():
-            self.result = Result(
-                problem=problem,
-                t=np.array(problem.time.t[plan.levels]),
-                points=problem.mesh.points.copy(),
-                u=np.zeros((len(plan.u_levels), nv, d.dim)),
-                contact_nodes=d.contact.nodes.copy(),
-                contact_s=d.contact.s.copy(),
-                contact_points=d.contact.points.copy(),
-                wear=np.zeros((K, m)),
-                u_nu=np.zeros((K, m)),
-                p_rigid=np.zeros((K, m)),
-                p_soft=np.zeros((K, m)),
-                iterations=np.zeros(K, dtype=np.int64),
-                residuals=np.zeros((K, 3)),
-                u_levels=np.searchsorted(plan.levels, plan.u_levels).astype(np.int64),
-                solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
-                completed=0,
-                levels=plan.levels.copy(),
-                forces=np.zeros((K, len(d.force_parts), d.dim)),
-                dofs=np.zeros((len(plan.u_levels), d.n_dof)) if problem.order > 1 else None,
-            )
+        self.result = Result(
+            problem=problem,
+            t=np.array(problem.time.t[plan.levels]),
+            points=problem.mesh.points.copy(),
+            u=small_zeros((len(plan.u_levels), nv, d.dim)),
+            contact_nodes=d.contact.nodes.copy(),
+            contact_s=d.contact.s.copy(),
+            contact_points=d.contact.points.copy(),
+            wear=small_zeros((K, m)),
+            u_nu=small_zeros((K, m)),
+            p_rigid=small_zeros((K, m)),
+            p_soft=small_zeros((K, m)),
+            iterations=small_zeros(K, dtype=np.int64),
+            residuals=small_zeros((K, 3)),
+            u_levels=np.searchsorted(plan.levels, plan.u_levels).astype(np.int64),
+            solver={"method": opts.method, "tol": opts.tol, "backend": opts.backend},
+            completed=0,
+            levels=plan.levels.copy(),
+            forces=small_zeros((K, len(d.force_parts), d.dim)),
+            dofs=small_zeros((len(plan.u_levels), d.n_dof)) if problem.order > 1 else None,
+        )
 
     def level(self, n: int, w: NDArray[np.float64], solution: StepSolution) -> None:
         r, out = self.row[n], self.result

@@ -7,7 +7,7 @@ threshold (128 KiB at first) to the kernel at once and trims the top of its heap
 beyond 128 KiB of free memory, so each new array page-faults again; NumPy also asks
 for transparent huge pages on large arrays, and the first write into a fresh huge page
 can stall for milliseconds (on the development machine, a KVM guest, with no
-compaction counted by the kernel: :func:`small_pages`). On the 2-core
+compaction counted by the kernel: :func:`small_zeros`). On the 2-core
 machine, a run at 66,048 unknowns that follows a factorization made 33,842 page faults
 and spent 0.064 s in the kernel with glibc's default, against 16,711 and 0.027 s with
 freed memory kept, nearly all of them the first writes into its new result
@@ -20,20 +20,24 @@ memory of a big run does not grow. The setting is process-wide: the command line
 the study workers make it at start, :func:`vemwear.simulate.simulate` at its first
 call.
 
-:func:`small_pages` makes the arrays of a result without NumPy's request for huge
+:func:`small_zeros` makes the large arrays of a result in fresh mappings of 4 KB
 pages: they are written once, and their first writes into fresh huge pages stalled at
 random on the development machine (a KVM guest).
 """
 
 from __future__ import annotations
 
-import contextlib
 import ctypes
+import mmap
 import platform
-from collections.abc import Iterator
+import sys
 from functools import cache
+from typing import Any
 
-__all__ = ["keep_freed_memory", "small_pages"]
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["SMALL_PAGES_FROM", "keep_freed_memory", "small_zeros"]
 
 _M_TRIM_THRESHOLD = -1  # glibc's mallopt parameters (malloc.h)
 _M_MMAP_THRESHOLD = -3
@@ -43,6 +47,9 @@ _M_MMAP_THRESHOLD = -3
 MMAP_THRESHOLD = 32 * 2**20
 #: free memory at the top of the heap kept for the next arrays
 TRIM_THRESHOLD = 128 * 2**20
+#: arrays of :func:`small_zeros` from this size on get a mapping of their own (NumPy
+#: asks for huge pages from the same size)
+SMALL_PAGES_FROM = 4 * 2**20
 
 
 @cache
@@ -67,9 +74,10 @@ def keep_freed_memory() -> bool:
     return mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD) == 1 and ok
 
 
-@contextlib.contextmanager
-def small_pages() -> Iterator[None]:
-    """Allocate the enclosed NumPy arrays without asking for transparent huge pages.
+def small_zeros(shape: Any, dtype: Any = np.float64) -> NDArray[Any]:
+    """A zero array in 4 KB pages: from :data:`SMALL_PAGES_FROM` bytes on (on Linux), in
+    a fresh private mapping of its own marked ``MADV_NOHUGEPAGE``, released with the
+    array.
 
     NumPy asks the kernel for 2 MB pages on every array of 4 MB or more
     (``madvise(MADV_HUGEPAGE)``). A result array that a run writes once and hands back
@@ -77,19 +85,14 @@ def small_pages() -> Iterator[None]:
     huge page can stall: at 66,048 unknowns, writing u into a new 68 MB result took
     0.09 s (0.07 s in the kernel) in 14 or 15 of 33 runs, against 0.02 s in the others
     (``benchmarks/bench_threads.py --n 128``). With 4 KB pages it takes 0.04 s in
-    every run. The switch is NumPy's own (``NUMPY_MADVISE_HUGEPAGE`` sets it at
-    start); where this NumPy has none, nothing changes.
+    every run. Turning NumPy's request off is not enough: with freed memory kept
+    (:func:`keep_freed_memory`) an array can come from heap memory that NumPy advised
+    for huge pages before, for another array.
     """
-    import numpy as np
-
-    # numpy._core.multiarray since NumPy 2, numpy.core.multiarray before
-    core = getattr(np, "_core", None) or getattr(np, "core", None)
-    switch = getattr(getattr(core, "multiarray", None), "_set_madvise_hugepage", None)
-    if switch is None:  # pragma: no cover - every NumPy since 1.20 has it
-        yield
-        return
-    before = switch(False)
-    try:
-        yield
-    finally:
-        switch(before)
+    dt = np.dtype(dtype)
+    nbytes = int(np.prod(shape, dtype=np.int64)) * dt.itemsize
+    if nbytes < SMALL_PAGES_FROM or sys.platform != "linux":
+        return np.zeros(shape, dtype=dt)
+    mm = mmap.mmap(-1, nbytes, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
+    mm.madvise(mmap.MADV_NOHUGEPAGE)  # also where the kernel gives huge pages always
+    return np.frombuffer(mm, dtype=dt).reshape(shape)  # zero, writable, keeps mm alive
