@@ -19,10 +19,14 @@ Reported: microseconds per level of the time loop (``timings["time_loop"]`` / le
 as min / median / max, the ratios of the medians, and the largest difference of the
 final wear between pieces and newton (relative to its maximum).
 
+``--reciprocating``: v*(t) = (cos 2 pi t, 0) instead of (1, 0), so the wear rate changes
+at every level and the friction turns twice a period (a run of levels ends there).
+
 Usage::
 
     python benchmarks/bench_levels.py
     python benchmarks/bench_levels.py --sizes 16 32 64 --levels 4000 --repeat 5
+    python benchmarks/bench_levels.py --reciprocating --sizes 16 32 --repeat 3
 """
 
 from __future__ import annotations
@@ -41,12 +45,18 @@ def _stats(v: list[float]) -> str:
     return f"{min(v):7.1f} {statistics.median(v):7.1f} {max(v):7.1f}"
 
 
-def _problem(nx: int, levels: int):
+def _reciprocating(t: float) -> tuple[float, float]:
+    """v*(t) = (cos 2 pi t, 0): the foundation turns at t = 1/4, 3/4, ..."""
+    return (float(np.cos(2.0 * np.pi * t)), 0.0)
+
+
+def _problem(nx: int, levels: int, reciprocating: bool = False):
     from vemwear.paper import ex52
     from vemwear.simulate import TimeGrid
 
     pr = ex52.problem(0.2, 2.0, divisions=(nx, nx // 2))  # data set 1
-    return dataclasses.replace(pr, time=TimeGrid.uniform(levels / 64, levels))
+    pr = dataclasses.replace(pr, time=TimeGrid.uniform(levels / 64, levels))
+    return dataclasses.replace(pr, v_star=_reciprocating) if reciprocating else pr
 
 
 def _loop(problem) -> tuple[float, np.ndarray]:
@@ -78,10 +88,10 @@ def _floor(problem) -> float:
     return time.perf_counter() - t
 
 
-def table(nx: int, levels: int, repeat: int) -> None:
+def table(nx: int, levels: int, repeat: int, reciprocating: bool) -> None:
     from vemwear.contact import CallableCompliance
 
-    pieces = _problem(nx, levels)
+    pieces = _problem(nx, levels, reciprocating)
     law = pieces.p
     newton = dataclasses.replace(pieces, p=CallableCompliance(law, law.derivative))
     L = len(pieces.time.t)
@@ -113,6 +123,7 @@ def main() -> None:
     ap.add_argument("--sizes", type=int, nargs="+", default=[16, 32, 64, 128])
     ap.add_argument("--levels", type=int, default=2000)
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--reciprocating", action="store_true", help="v*(t) = (cos 2 pi t, 0)")
     args = ap.parse_args()
     print(f"machine: {os.cpu_count()} cores; python {sys.version.split()[0]}")
     print("microseconds per level of the time loop, min / median / max")
@@ -120,8 +131,10 @@ def main() -> None:
         f"{'squares':>11} {'m':>5} {'levels':>7} | {'pieces':^23} | {'newton':^23} |"
         f" {'floor':^23} | {'new/pc':>6} {'pc/fl':>6} | {'wear diff':>8}"
     )
+    if args.reciprocating:
+        print("reciprocating sliding: v*(t) = (cos 2 pi t, 0)")
     for nx in args.sizes:
-        table(nx, args.levels, args.repeat)
+        table(nx, args.levels, args.repeat, args.reciprocating)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ import json
 import platform
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -95,25 +96,43 @@ def madvise_switch():
     switch(before)
 
 
+# in a new process, whose heap is fresh: NumPy's 16 MB zeros come from the top of the
+# heap untouched, so NumPy's madvise gives them huge pages when the kernel has some
+_ADVISED_CHILD = r"""
+import json, sys
+import numpy as np
+np._core.multiarray._set_madvise_hugepage(True)
+sys.path.insert(0, sys.argv[1])
+from test_heap import _huge_kb
+from vemwear.util.heap import keep_freed_memory, small_zeros
+keep_freed_memory()
+advised = np.zeros(2**21)  # 16 MB from the heap, advised by NumPy, written
+advised[:] = 1.0
+huge = _huge_kb(advised.ctypes.data + advised.nbytes // 2)
+del advised
+made = small_zeros((2**10, 2**11))  # NumPy's zeros would reuse that heap memory
+fresh = made.shape == (2**10, 2**11) and made.flags.writeable and not made.any()
+made[:] = 1.0
+print(json.dumps({"advised": huge, "made": _huge_kb(made.ctypes.data + made.nbytes // 2),
+                  "fresh": bool(fresh), "small": small_zeros(10).base is None}))
+"""
+
+
 def test_small_zeros_are_in_small_pages_also_in_advised_heap_memory(madvise_switch) -> None:
     """A ``small_zeros`` array gets no transparent huge pages, also where freed memory is
     kept and the heap holds memory NumPy advised for huge pages before (the case that
-    turning NumPy's request off did not cover)."""
-    import numpy as np
-
-    from vemwear.util.heap import keep_freed_memory, small_zeros
-
-    keep_freed_memory()
-    advised = np.zeros(2**21)  # 16 MB from the heap, advised by NumPy, written
-    advised[:] = 1.0
-    if _huge_kb(advised.ctypes.data + advised.nbytes // 2) == 0:
+    turning NumPy's request off did not cover: 14 MB of huge pages there)."""
+    out = subprocess.run(
+        [sys.executable, "-c", _ADVISED_CHILD, str(Path(__file__).parent)],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    got = json.loads(out.stdout.splitlines()[-1])
+    if got["advised"] == 0:
         pytest.skip("the kernel gave no huge pages to a madvised array")
-    del advised
-    made = small_zeros((2**10, 2**11))  # NumPy's zeros would reuse that heap memory
-    assert made.shape == (2**10, 2**11) and made.flags.writeable and not made.any()
-    made[:] = 1.0
-    assert _huge_kb(made.ctypes.data + made.nbytes // 2) == 0
-    assert small_zeros(10).base is None  # small arrays: plain NumPy zeros
+    assert got["fresh"] and got["small"]  # zeros, writable; small arrays: NumPy's own
+    assert got["made"] == 0
 
 
 def test_simulate_writes_u_into_small_pages(madvise_switch) -> None:
