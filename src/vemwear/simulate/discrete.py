@@ -127,7 +127,9 @@ class Discretization:
             dof_points=dof_points,
             trace=trace,
         )
-        self._constant_load = not (
+        #: whether the load F of the step problems is the same at all times (then
+        #: :meth:`load` gives one array object)
+        self.constant_load = not (
             callable(problem.f1)
             or any(callable(f) for f in problem.tractions.values())
             or con.time_dependent
@@ -210,7 +212,7 @@ class Discretization:
     def load(self, t: float) -> NDArray[np.float64]:
         """``f_h(t) - K_fc u_c(t)`` on the free dofs (body force by 3.3, tractions by
         edge quadrature, the lifting of prescribed displacements)."""
-        if self._constant_load and self._F0 is not None:
+        if self.constant_load and self._F0 is not None:
             return self._F0
         F = self._external_load(t)[self.free]
         if self.K_fc is not None:
@@ -220,7 +222,7 @@ class Discretization:
                 f"[loads] f1, f2 give a load vector with non-finite entries at t = {t:g} (an "
                 "overflow); use loads of a sensible scale"
             )
-        if self._constant_load:
+        if self.constant_load:
             self._F0 = F
         return F
 
@@ -240,7 +242,7 @@ class Discretization:
     def _sliding(self, t: float) -> _Sliding:
         """:meth:`tangential_velocity` with the friction coefficients and wear rate."""
         s = self._sliding_at
-        if s is None or (s.t != t and not self._steady_velocity):
+        if s is None or (s.t != t and not self.steady_sliding):
             cb = self.contact
             v = tangential_velocity(self.problem.parts, cb.part, cb.tangents, t)
             v[np.abs(v) <= self._velocity_roundoff] = 0.0
@@ -251,7 +253,7 @@ class Discretization:
         return s
 
     @functools.cached_property
-    def _steady_velocity(self) -> bool:
+    def steady_sliding(self) -> bool:
         """Whether every part's v* is a constant vector: then v*_tau and what follows
         from it are the same at every time."""
         return all(pc.velocity.steady for pc in self.problem.parts)
@@ -272,24 +274,12 @@ class Discretization:
         """The step problem of a level with the wear ``w`` (= w^n)."""
         t = float(self.problem.time.t[level])
         return StepData(
-            F=self.load(t), w=self.step_wear(w), fric=self._sliding(t).fric, t=t, level=level
+            F=self.load(t), w=self.step_wear(w), fric=self.friction(t), t=t, level=level
         )
 
     def step_wear(self, w: NDArray[np.float64]) -> NDArray[np.float64]:
         """The wear of the step problem, ``w + shift`` (``w`` itself without a shift)."""
         return w if self.shift is None else w + self.shift
-
-    @property
-    def constant_load(self) -> bool:
-        """Whether the load ``F`` of the step problems is the same at all times (then
-        :meth:`load` gives one array object)."""
-        return self._constant_load
-
-    @property
-    def steady_sliding(self) -> bool:
-        """Whether every part's v* is one constant vector (then the friction and wear
-        rate of every level are the same array objects)."""
-        return self._steady_velocity
 
     def friction(self, t: float) -> NDArray[np.float64]:
         """``mu n*.tau`` at the contact nodes at time t (the step data's ``fric``)."""
@@ -332,22 +322,24 @@ class Discretization:
         X[:, m:] *= w
         out = []
         for j, step in enumerate(steps):
+            # one product a level: its forces do not depend on the run it came in
             f = op.A @ X[j]
             if op.ZT is not None and op.ET is not None:
-                f += self._static_reactions(op, step, len(f))
+                f += self._static_reactions(op, op.ZT, op.ET, step)
             out.append(f.reshape(-1, self.dim))
         return out
 
-    def _static_reactions(self, op: _Resultants, step: StepData, rows: int) -> NDArray:
+    def _static_reactions(
+        self, op: _Resultants, ZT: NDArray, ET: NDArray, step: StepData
+    ) -> NDArray:
         """The reactions' part that the layer forces leave, computed once per load."""
-        if op.b is None or step.F is not op.b_F or not self._constant_load:
-            assert op.ZT is not None and op.ET is not None
+        if op.b is None or step.F is not op.b_F or not self.constant_load:
             con = self.constraints
             static = -self._external_load(step.t)[con.dofs]
             if not con.zero:  # K_cc u_c of the prescribed values
                 static = static + np.asarray(self._K_cc @ con.values(step.t))
-            b = np.zeros(rows)
-            b[rows - len(op.ZT) :] = op.ZT @ step.F + op.ET @ static
+            b = np.zeros(len(op.A))
+            b[len(op.A) - len(ZT) :] = ZT @ step.F + ET @ static
             op.b, op.b_F = b, step.F
         return op.b
 
@@ -404,7 +396,7 @@ class Discretization:
             return self._F_all
         with np.errstate(all="ignore"):
             F = self.problem.external_load(t)
-        if self._constant_load:
+        if self.constant_load:
             self._F_all = F
         return F
 

@@ -197,9 +197,8 @@ def run_levels(
     # levels on one piece of the step problem, certified together (solvers/pieces.py),
     # as long as the friction stays the same; each level has the same numbers as in
     # any other run, so a resumed run stays bitwise the same
-    predict: Any = getattr(step_solver, "predict", None)
-    if not (d.constant_load and getattr(step_solver, "predicts", False)):
-        predict = None
+    runs = d.constant_load and getattr(step_solver, "predicts", False)
+    predict: Any = step_solver.predict if runs else None
     # (step data, solution, w^{n+1} or None) of the predicted levels not yet handed on
     ahead: deque[tuple[StepData, StepSolution, Any]] = deque()
 
