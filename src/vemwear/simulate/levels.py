@@ -166,15 +166,13 @@ def run_levels(
             return
         if block.shape[1] < len(pending):
             block = np.empty((sysm.n_free, max(recover_block, len(pending))), order="F")
-        X = step_solver.recover_many(
-            [st for _, _, st, _ in pending],
-            [so.p_rigid for *_, so in pending],
-            [so.p_soft for *_, so in pending],
-            out=block[:, : len(pending)],
-        )
-        fulls = kkt_residuals_block(
-            sysm, [st for _, _, st, _ in pending], X, [so.p_rigid for *_, so in pending]
-        )
+        steps = [st for _, _, st, _ in pending]
+        p_rigids = [so.p_rigid for *_, so in pending]
+        p_softs = [so.p_soft for *_, so in pending]
+        X = step_solver.recover_many(steps, p_rigids, p_softs, out=block[:, : len(pending)])
+        # feasibility and complementarity over the scale of the normal displacements
+        y_refs = step_solver.displacement_scales(steps, X, p_rigids, p_softs)
+        fulls = kkt_residuals_block(sysm, steps, X, p_rigids, y_refs)
         rows = sink_rows([n_ for n_, *_ in pending]) if sink_rows is not None else None
         U = d.full_dofs_block(X, [st.t for _, _, st, _ in pending], out=rows)
         for j, (n_, _, st, so) in enumerate(pending):

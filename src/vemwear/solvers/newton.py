@@ -36,6 +36,7 @@ from .system import (
     StepSolution,
     check_converged,
     kkt_residuals,
+    kkt_residuals_block,
 )
 from .threads import solver_threads
 
@@ -169,6 +170,37 @@ class CondensedNewton:
             self._F = F
         return self._d  # type: ignore[return-value]
 
+    def displacement_scales(
+        self,
+        steps: list[StepData],
+        X: NDArray,
+        p_rigids: list[NDArray],
+        p_softs: list[NDArray],
+    ) -> NDArray:
+        """``max(max g, max |d|)`` of each level of a recovered block ``X`` (n_free, k):
+        the scale of the normal displacements of its KKT residuals (:func:`kkt_residuals`).
+
+        ``N u`` comes out of ``d = N K^{-1} F`` less the normal displacement of the
+        contact forces, ``y = d - C_NN W (p_soft + p_rigid) - C_NT W Fric p_soft``. Where
+        the load alone would push the body far beyond the rigid layer (a slender body:
+        ``|d|`` a hundred times g), ``y`` is a small difference of large terms and its
+        error is that of ``d``, up to cond(K) times the machine epsilon times ``|d|``:
+        measured over g alone it can exceed any tolerance near 1e-10 however the
+        solution is computed. ``d`` is taken from the condensed equation with the
+        recovered ``N u`` (one product with the m x 2m block ``H``, no solve).
+        """
+        s = self.system
+        w = s.weights[:, None]
+        P_soft = np.column_stack(p_softs)
+        x = np.vstack(
+            [
+                w * (P_soft + np.column_stack(p_rigids)),
+                w * np.column_stack([st.fric for st in steps]) * P_soft,
+            ]
+        )
+        D = s.N_contact @ X[s.contact_cols] + self.H @ x
+        return np.maximum(np.abs(D).max(axis=0), 1.0 / self.inv_g_ref)
+
     def reduced_matrix(self, active: NDArray, dp: NDArray, fric: NDArray) -> _ReducedMatrix:
         """The LU factors of the reduced Newton matrix of this active set, slopes and
         friction: the kept ones while they stay the same."""
@@ -258,8 +290,11 @@ class CondensedNewton:
         p_rigid = np.maximum(p_rigid, 0.0)
         u = None
         if recover:
-            u = self.recover_many([step], [p_rigid], [p_soft])[:, 0]
-            res = kkt_residuals(s, step, u, p_rigid)
+            # certified as a recovered block is (run_levels): the solve's backward error
+            X = self.recover_many([step], [p_rigid], [p_soft])
+            scales = self.displacement_scales([step], X, [p_rigid], [p_soft])
+            res = kkt_residuals_block(s, [step], X, [p_rigid], scales)[0]
+            u = X[:, 0]
             y = s.N @ u
         check_converged(res, self.options.tol, step, "semismooth Newton (condensed)", it)
         return StepSolution(

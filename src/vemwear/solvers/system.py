@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -187,14 +188,22 @@ def _residuals(
 
 
 def kkt_residuals(
-    system: ContactSystem, step: StepData, u: NDArray, p_rigid: NDArray
+    system: ContactSystem,
+    step: StepData,
+    u: NDArray,
+    p_rigid: NDArray,
+    y_ref: float | None = None,
 ) -> dict[str, float]:
     """Scaled KKT residuals of a candidate solution (all dimensionless, max norms).
 
     ``equilibrium``: residual of the equation over the largest force in it;
-    ``feasibility``: largest violation of ``N u <= g`` over max g;
-    ``complementarity``: ``max |min(p_rigid / p_ref, (g - N u) / g_ref)|`` (it is zero
+    ``feasibility``: largest violation of ``N u <= g`` over ``y_ref``;
+    ``complementarity``: ``max |min(p_rigid / p_ref, (g - N u) / y_ref)|`` (it is zero
     exactly when p_rigid >= 0, N u <= g and p_rigid (N u - g) = 0).
+
+    ``y_ref``, the scale of the normal displacements, is max g unless given (the
+    condensed solver gives ``max(max g, max |d|)``, d the normal displacement of the
+    load alone: :meth:`~vemwear.solvers.newton.CondensedNewton.displacement_scales`).
     """
     force, p_soft = system.contact_force(u, p_rigid, step.fric, step.w)
     Ku = system.K @ u
@@ -204,7 +213,14 @@ def kkt_residuals(
         np.abs(step.F).max(initial=0), np.abs(Ku).max(initial=0), np.abs(force).max(initial=0), tiny
     )
     p_ref = max(float(np.abs(p_rigid).max(initial=0)), float(np.abs(p_soft).max(initial=0)), tiny)
-    return _residuals(system, system.N @ u, p_rigid, np.abs(r).max(initial=0) / fscale, p_ref)
+    return _residuals_block(
+        system,
+        (system.N @ u)[:, None],
+        p_rigid[:, None],
+        np.array([np.abs(r).max(initial=0) / fscale]),
+        np.array([p_ref]),
+        None if y_ref is None else np.array([y_ref]),
+    )[0]
 
 
 def _by_load(steps: list[StepData], Z: NDArray) -> list[tuple[NDArray, NDArray]]:
@@ -222,10 +238,15 @@ PROBES = 3
 
 
 def kkt_residuals_block(
-    system: ContactSystem, steps: list[StepData], X: NDArray, p_rigids: list[NDArray]
+    system: ContactSystem,
+    steps: list[StepData],
+    X: NDArray,
+    p_rigids: list[NDArray],
+    y_refs: NDArray | None = None,
 ) -> list[dict[str, float]]:
     """:func:`kkt_residuals` of several levels at once, ``X`` (n_free, k) their
-    displacements.
+    displacements, ``y_refs`` (k,) their scales of the normal displacements (max g
+    unless given).
 
     Feasibility and complementarity are exact, level by level (they need only ``N X``).
     The recovery is a direct solve with the contact forces known, so its equilibrium
@@ -288,16 +309,22 @@ def kkt_residuals_block(
         np.maximum(np.abs(P_rigid).max(axis=0, initial=0), np.abs(P_soft).max(axis=0, initial=0)),
         _TINY,
     )
-    return _residuals_block(system, NX, P_rigid, equilibrium, p_ref)
+    return _residuals_block(system, NX, P_rigid, equilibrium, p_ref, y_refs)
 
 
 def _residuals_block(
-    system: ContactSystem, Y: NDArray, P_rigid: NDArray, equilibrium: NDArray, p_ref: NDArray
+    system: ContactSystem,
+    Y: NDArray,
+    P_rigid: NDArray,
+    equilibrium: NDArray,
+    p_ref: NDArray,
+    y_ref: NDArray | None = None,
 ) -> list[dict[str, float]]:
     """:func:`_residuals` of the columns of ``Y = N X`` and ``P_rigid``, bitwise the same
-    (elementwise operations and maxima over each column)."""
+    (elementwise operations and maxima over each column); ``y_ref`` (k,), the scales of
+    the normal displacements, max g unless given."""
     g = system.g[:, None]
-    g_ref = max(float(np.abs(system.g).max()), _TINY)
+    g_ref: Any = max(float(np.abs(system.g).max()), _TINY) if y_ref is None else y_ref
     ncp = np.minimum(P_rigid / p_ref, (g - Y) / g_ref)
     feasibility = np.fmax(0.0, (Y - g).max(axis=0, initial=0)) / g_ref  # fmax: as max(0.0, x)
     complementarity = np.abs(ncp).max(axis=0, initial=0)
