@@ -286,7 +286,8 @@ def test_a_slender_bar_is_certified_over_the_scale_of_its_normal_displacements()
     recovered u is as accurate as a direct solve gives it (it agrees with the full-space
     Newton), yet measured over g alone its contact constraint is violated by about
     1e-10 of g, the tolerance: the certificate measures it over max(g, |d|), and the
-    run is certified and agrees with the full-space Newton."""
+    run is certified and agrees with the full-space Newton (k = 1 and 2, and in 3D)."""
+    from vemwear.mesh.generate3d import box_hexahedra, tag_box
     from vemwear.solvers.system import kkt_residuals, kkt_residuals_block
 
     mesh = tag_rectangle(rectangle_squares((8.0, 1.0), (16, 2)))
@@ -309,9 +310,14 @@ def test_a_slender_bar_is_certified_over_the_scale_of_its_normal_displacements()
     assert max(certified.values()) < 1e-11
     assert solver.solve(step, None, recover=True).residuals == certified
 
-    for order in (1, 2):  # nodal contact dofs, and the trace operator of k = 2
-        pr = dataclasses.replace(pr, order=order)
-        r = simulate(pr, "newton")  # u recovered and certified at every level
-        full = simulate(pr, "newton-full")
+    # nodal contact dofs, the trace operator of k = 2, and the bar in 3D
+    box = tag_box(
+        box_hexahedra((8.0, 1.0, 1.0), (16, 2, 2)),
+        {"clamped": "xmin", "contact": "zmin", "traction": ["xmax", "ymin", "ymax", "zmax"]},
+    )
+    bar3d = dataclasses.replace(pr, mesh=box, f1=(0.0, 0.0, -0.06), v_star=(1.0, 0.0, 0.0))
+    for case in (pr, dataclasses.replace(pr, order=2), bar3d):
+        r = simulate(case, "newton")  # u recovered and certified at every level
+        full = simulate(case, "newton-full")
         assert r.residuals.max() < 1e-10
         assert rel(r.u, full.u) < 1e-9 and rel(r.wear, full.wear) < 1e-9
