@@ -104,7 +104,8 @@ class CondensedNewton:
     with ``d = N K^{-1} F`` and complementarity between ``p_rigid`` and ``g - y``. Every
     step is certified by the residuals of these equations (:func:`condensed_residuals`);
     the full displacement, when asked for, by those of the full system
-    (:func:`kkt_residuals`).
+    (:func:`kkt_residuals_block`: the solve's backward error, and the constraint over
+    the scale of the normal displacements, :meth:`displacement_scales`).
 
     Parameters
     ----------
@@ -178,7 +179,8 @@ class CondensedNewton:
         p_softs: list[NDArray],
     ) -> NDArray:
         """``max(max g, max |d|)`` of each level of a recovered block ``X`` (n_free, k):
-        the scale of the normal displacements of its KKT residuals (:func:`kkt_residuals`).
+        the scale of the normal displacements of its KKT residuals
+        (:func:`~vemwear.solvers.system.kkt_residuals_block`).
 
         ``N u`` comes out of ``d = N K^{-1} F`` less the normal displacement of the
         contact forces, ``y = d - C_NN W (p_soft + p_rigid) - C_NT W Fric p_soft``. Where

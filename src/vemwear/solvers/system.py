@@ -188,22 +188,14 @@ def _residuals(
 
 
 def kkt_residuals(
-    system: ContactSystem,
-    step: StepData,
-    u: NDArray,
-    p_rigid: NDArray,
-    y_ref: float | None = None,
+    system: ContactSystem, step: StepData, u: NDArray, p_rigid: NDArray
 ) -> dict[str, float]:
     """Scaled KKT residuals of a candidate solution (all dimensionless, max norms).
 
     ``equilibrium``: residual of the equation over the largest force in it;
-    ``feasibility``: largest violation of ``N u <= g`` over ``y_ref``;
-    ``complementarity``: ``max |min(p_rigid / p_ref, (g - N u) / y_ref)|`` (it is zero
+    ``feasibility``: largest violation of ``N u <= g`` over max g;
+    ``complementarity``: ``max |min(p_rigid / p_ref, (g - N u) / g_ref)|`` (it is zero
     exactly when p_rigid >= 0, N u <= g and p_rigid (N u - g) = 0).
-
-    ``y_ref``, the scale of the normal displacements, is max g unless given (the
-    condensed solver gives ``max(max g, max |d|)``, d the normal displacement of the
-    load alone: :meth:`~vemwear.solvers.newton.CondensedNewton.displacement_scales`).
     """
     force, p_soft = system.contact_force(u, p_rigid, step.fric, step.w)
     Ku = system.K @ u
@@ -213,14 +205,7 @@ def kkt_residuals(
         np.abs(step.F).max(initial=0), np.abs(Ku).max(initial=0), np.abs(force).max(initial=0), tiny
     )
     p_ref = max(float(np.abs(p_rigid).max(initial=0)), float(np.abs(p_soft).max(initial=0)), tiny)
-    return _residuals_block(
-        system,
-        (system.N @ u)[:, None],
-        p_rigid[:, None],
-        np.array([np.abs(r).max(initial=0) / fscale]),
-        np.array([p_ref]),
-        None if y_ref is None else np.array([y_ref]),
-    )[0]
+    return _residuals(system, system.N @ u, p_rigid, np.abs(r).max(initial=0) / fscale, p_ref)
 
 
 def _by_load(steps: list[StepData], Z: NDArray) -> list[tuple[NDArray, NDArray]]:
@@ -245,8 +230,10 @@ def kkt_residuals_block(
     y_refs: NDArray | None = None,
 ) -> list[dict[str, float]]:
     """:func:`kkt_residuals` of several levels at once, ``X`` (n_free, k) their
-    displacements, ``y_refs`` (k,) their scales of the normal displacements (max g
-    unless given).
+    displacements; feasibility and complementarity over ``y_refs`` (k,), the scales of
+    their normal displacements, instead of max g when given (the condensed solver gives
+    ``max(max g, max |d|)``, d the normal displacement of the load alone:
+    :meth:`~vemwear.solvers.newton.CondensedNewton.displacement_scales`).
 
     Feasibility and complementarity are exact, level by level (they need only ``N X``).
     The recovery is a direct solve with the contact forces known, so its equilibrium
