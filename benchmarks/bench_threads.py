@@ -21,13 +21,14 @@ allocations), of:
 
 These run with freed memory kept by the allocator, as in the command line
 (:func:`vemwear.util.heap.keep_freed_memory`). Then ``condensed run`` again in child
-processes, alternately with the allocator's freed memory kept and returned to the
-system (glibc's default): one untimed run and ``--runs`` timed runs each, with the
-page faults and the kernel time of each run (and, for the repeats more than 10 %
-above the median, their kernel time against the others'). The problem keeps its
-factorization from run to run, so a run is the time loop and the recovery of u at every level; its floor,
-measured right after it, is the block solve it cannot do without: one column per level
-with the same factorization (memory-bound, like most of the run). Then a new
+processes, in turn with the allocator's freed memory kept, returned to the system
+(glibc's default), and kept with MKL at one thread (``MKL_NUM_THREADS=1``): one
+untimed run and ``--runs`` timed runs each, with the page faults and the kernel time
+of each run (and, for the repeats more than 10 % above the median, their kernel time
+against the others'). The problem keeps its factorization from run to run, so a run
+is the time loop and the recovery of u at every level; its floor, measured right
+after it, is the block solve it cannot do without: one column per level with the same
+factorization (memory-bound, like most of the run). Then a new
 factorization of the same matrix, the other large work of a study's worker between
 its runs, whose freed memory the next run finds returned or kept. Last, the floors of
 the machine itself, interleaved with the runs: a fixed single-threaded NumPy workload
@@ -56,7 +57,7 @@ def _row(name: str, v: list[float], unit: str) -> str:
     lo, med, hi = min(v), statistics.median(v), max(v)
     near = sum(abs(x / med - 1) <= 0.1 for x in v)  # repeats within 10 % of the median
     return (
-        f"{name:<40} {lo:10.4f} {med:10.4f} {hi:10.4f} {unit:<8} spread "
+        f"{name:<48} {lo:10.4f} {med:10.4f} {hi:10.4f} {unit:<8} spread "
         f"{100 * (hi / lo - 1):6.1f} %  within 10 %: {near:2d}/{len(v)}"
     )
 
@@ -227,7 +228,7 @@ def main(argv: list[str] | None = None) -> int:
                 times.setdefault((name, mode), []).append(fn())
     os.environ.pop("VEMWEAR_BLAS_THREADS", None)
     print(f"1/h = {a.n}: {s.n_free} unknowns, {a.repeat} interleaved repeats")
-    print(f"{'case':<40} {'min':>10} {'median':>10} {'max':>10}")
+    print(f"{'case':<48} {'min':>10} {'median':>10} {'max':>10}")
     for name, (_fn, unit) in cases.items():
         for mode in modes:
             if (name, mode) in times:
@@ -253,14 +254,24 @@ def _heap_table(a: argparse.Namespace, run_time: float) -> None:
         reps = max(1, round(run_time / once))
         once = _stream_work(big, to, 10) / 10
         copies = max(1, round(run_time / once))
-    rows: dict[str, list[tuple[float, ...]]] = {"kept": [], "returned": []}
+    # the child's allocator setting, and MKL's threads (two, or one for every phase)
+    children = {
+        "kept": ("kept", {}),
+        "returned": ("returned", {}),
+        "kept, MKL 1 thread": ("kept", {"MKL_NUM_THREADS": "1"}),
+    }
+    rows: dict[str, list[tuple[float, ...]]] = {mode: [] for mode in children}
     sorts: list[float] = []
     streams: list[float] = []
     for _ in range(a.repeat):
-        for mode in rows:
-            cmd = [sys.executable, __file__, "--heap-child", mode, "--n", str(a.n)]
+        for mode, (heap, env) in children.items():
+            cmd = [sys.executable, __file__, "--heap-child", heap, "--n", str(a.n)]
             out = subprocess.run(
-                [*cmd, "--runs", str(a.runs)], capture_output=True, text=True, check=True
+                [*cmd, "--runs", str(a.runs)],
+                capture_output=True,
+                text=True,
+                check=True,
+                env={**os.environ, **env},
             )
             rows[mode] += [tuple(r) for r in json.loads(out.stdout.splitlines()[-1])]
             with threadpool_limits(limits=1):
@@ -268,7 +279,8 @@ def _heap_table(a: argparse.Namespace, run_time: float) -> None:
                     sorts.append(_floor_work(x, reps))
                     streams.append(_stream_work(big, to, copies))
     print(
-        f"condensed run in child processes ({a.repeat} x {a.runs} runs each, interleaved); "
+        f"condensed run in child processes ({a.repeat} x {a.runs} runs each, interleaved; "
+        "freed memory kept or returned, MKL at two threads or one); "
         "kernel time and page faults: medians per run; floor: the block solve of one "
         "column per level with the run's factorization, right after each run; then a "
         "new factorization of the same matrix"
