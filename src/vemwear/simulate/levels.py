@@ -171,7 +171,9 @@ def run_levels(
         p_softs = [so.p_soft for *_, so in pending]
         X = step_solver.recover_many(steps, p_rigids, p_softs, out=block[:, : len(pending)])
         # feasibility and complementarity over the scale of the normal displacements
-        y_refs = step_solver.displacement_scales(steps, X, p_rigids, p_softs)
+        y_refs = step_solver.displacement_scales(
+            steps, [so.u_nu for *_, so in pending], p_rigids, p_softs
+        )
         fulls = kkt_residuals_block(sysm, steps, X, p_rigids, y_refs)
         rows = sink_rows([n_ for n_, *_ in pending]) if sink_rows is not None else None
         U = d.full_dofs_block(X, [st.t for _, _, st, _ in pending], out=rows)

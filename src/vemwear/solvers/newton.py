@@ -174,22 +174,23 @@ class CondensedNewton:
     def displacement_scales(
         self,
         steps: list[StepData],
-        X: NDArray,
+        ys: list[NDArray],
         p_rigids: list[NDArray],
         p_softs: list[NDArray],
     ) -> NDArray:
-        """``max(max g, max |d|)`` of each level of a recovered block ``X`` (n_free, k):
-        the scale of the normal displacements of its KKT residuals
-        (:func:`~vemwear.solvers.system.kkt_residuals_block`).
+        """``max(max g, max |d|)`` of each level, from its step solution (``y = N u``,
+        the pressures): the scale of the normal displacements of the KKT residuals of
+        its recovered u (:func:`~vemwear.solvers.system.kkt_residuals_block`).
 
-        ``N u`` comes out of ``d = N K^{-1} F`` less the normal displacement of the
-        contact forces, ``y = d - C_NN W (p_soft + p_rigid) - C_NT W Fric p_soft``. Where
-        the load alone would push the body far beyond the rigid layer (a slender body:
-        ``|d|`` a hundred times g), ``y`` is a small difference of large terms and its
-        error is that of ``d``, up to cond(K) times the machine epsilon times ``|d|``:
-        measured over g alone it can exceed any tolerance near 1e-10 however the
-        solution is computed. ``d`` is taken from the condensed equation with the
-        recovered ``N u`` (one product with the m x 2m block ``H``, no solve).
+        ``y`` is ``d = N K^{-1} F`` less the normal displacement of the contact forces,
+        ``y = d - C_NN W (p_soft + p_rigid) - C_NT W Fric p_soft``. Where the load alone
+        would push the body far beyond the rigid layer (a slender body: ``|d|`` a
+        hundred times g), ``y`` is a small difference of large terms and its error is
+        that of ``d``, up to cond(K) times the machine epsilon times ``|d|``: measured
+        over g alone it can exceed any tolerance near 1e-10 however the solution is
+        computed. ``d`` is taken from the condensed equation at the step solution (one
+        product with the m x 2m block ``H``, no solve), so the scale does not depend on
+        the displacement it certifies.
         """
         s = self.system
         w = s.weights[:, None]
@@ -200,7 +201,8 @@ class CondensedNewton:
                 w * np.column_stack([st.fric for st in steps]) * P_soft,
             ]
         )
-        D = s.N_contact @ X[s.contact_cols] + self.H @ x
+        D = self.H @ x
+        D += np.column_stack(ys)
         return np.maximum(np.abs(D).max(axis=0), 1.0 / self.inv_g_ref)
 
     def reduced_matrix(self, active: NDArray, dp: NDArray, fric: NDArray) -> _ReducedMatrix:
@@ -294,7 +296,7 @@ class CondensedNewton:
         if recover:
             # certified as a recovered block is (run_levels): the solve's backward error
             X = self.recover_many([step], [p_rigid], [p_soft])
-            scales = self.displacement_scales([step], X, [p_rigid], [p_soft])
+            scales = self.displacement_scales([step], [y], [p_rigid], [p_soft])
             res = kkt_residuals_block(s, [step], X, [p_rigid], scales)[0]
             u = X[:, 0]
             y = s.N @ u
