@@ -298,7 +298,7 @@ class MemorySink:
         self, n: int, u: NDArray[np.float64], residuals: NDArray[np.float64] | None
     ) -> None:
         dest = self.result.u[self.slot[n]]
-        if u.ctypes.data != dest.ctypes.data:  # not written in place already
+        if not np.may_share_memory(u, dest):  # not written in place already (a bounds test)
             dest[...] = u
         if residuals is not None and self.row[n] >= 0:
             self.result.residuals[self.row[n]] = residuals
