@@ -321,3 +321,18 @@ def test_a_slender_bar_is_certified_over_the_scale_of_its_normal_displacements()
         full = simulate(case, "newton-full")
         assert r.residuals.max() < 1e-10
         assert rel(r.u, full.u) < 1e-9 and rel(r.wear, full.wear) < 1e-9
+
+
+def test_a_soft_layer_much_stiffer_than_the_body_is_named_when_newton_fails():
+    """p = 1e5 r on Example 5.2's data: Newton's full steps cycle between active sets of
+    the soft layer; the error says so, with the stiffness ratio, instead of a bare
+    residual. With the paper's law the ratio is small and the note is empty."""
+    pr = paper_problem(divisions=(32, 16), steps=8, p=LinearCompliance(1e5))
+    with pytest.raises(ConvergenceError, match=r"did not converge at time level \d+ .*the "
+                       r"soft layer is [0-9.e+]+ times as stiff as the body"):  # fmt: skip
+        simulate(pr, "newton")
+    small = paper_problem(steps=2)
+    d = small.discrete
+    solver = d.step_solver(SolverOptions("newton"))
+    step = d.step_data(0, np.zeros(d.system.m))
+    assert solver.stiffness_note(solver.solve(step, None, recover=False).u_nu, step) == ""

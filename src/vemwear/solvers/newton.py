@@ -205,6 +205,23 @@ class CondensedNewton:
         D += np.column_stack(ys)
         return np.maximum(np.abs(D).max(axis=0), 1.0 / self.inv_g_ref)
 
+    def stiffness_note(self, y: NDArray, step: StepData) -> str:
+        """A note for an error message when the soft layer is much stiffer than the body
+        at the contact nodes, ``max_a p'(y_a - w_a) omega_a (C_NN)_aa`` above 100 (the
+        compliance slope times the body's own compliance there): a regime in which
+        Newton's full steps can cycle between active sets of the soft layer (Example
+        5.2's data on 32 x 16 squares run at 210 with p = 1e4 r and cycle from 630 on,
+        p = 3e4 r) and the certificate of the recovered u amplifies its rounding by the
+        slope. Empty otherwise."""
+        s = self.system
+        ratio = float(np.max(s.p.derivative(y - step.w) * s.weights * np.diag(self.C_NN)))
+        if not ratio > 100.0:
+            return ""
+        return (
+            f"; the soft layer is {ratio:.3g} times as stiff as the body at the contact "
+            "nodes (p' omega C_NN), where Newton's full steps can cycle"
+        )
+
     def reduced_matrix(self, active: NDArray, dp: NDArray, fric: NDArray) -> _ReducedMatrix:
         """The LU factors of the reduced Newton matrix of this active set, slopes and
         friction: the kept ones while they stay the same."""
@@ -300,7 +317,14 @@ class CondensedNewton:
             res = kkt_residuals_block(s, [step], X, [p_rigid], scales)[0]
             u = X[:, 0]
             y = s.N @ u
-        check_converged(res, self.options.tol, step, "semismooth Newton (condensed)", it)
+        check_converged(
+            res,
+            self.options.tol,
+            step,
+            "semismooth Newton (condensed)",
+            it,
+            lambda: self.stiffness_note(y, step),
+        )
         return StepSolution(
             u=u, u_nu=y, p_rigid=p_rigid, p_soft=p_soft, iterations=it, residuals=res
         )

@@ -13,6 +13,7 @@ nodal forces (docs/method.md).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -335,9 +336,15 @@ def condensed_residuals(
 
 
 def check_converged(
-    residuals: dict[str, float], tol: float, step: StepData, method: str, iterations: int
+    residuals: dict[str, float],
+    tol: float,
+    step: StepData,
+    method: str,
+    iterations: int,
+    why: Callable[[], str] | None = None,
 ) -> None:
-    """Raise :class:`ConvergenceError` naming the time level when a residual is above tol."""
+    """Raise :class:`ConvergenceError` naming the time level when a residual is above tol;
+    ``why()``, called only then, adds what the solver knows of the cause (or "")."""
     if all(0.0 <= v <= tol for v in residuals.values()):  # the usual case, at once
         return
     bad = [k for k, v in residuals.items() if not np.isfinite(v)]
@@ -352,4 +359,5 @@ def check_converged(
         raise ConvergenceError(
             f"{method} did not converge at time level {step.level} (t = {step.t:.6g}) after "
             f"{iterations} iterations: {worst} residual {residuals[worst]:.3e} > tol {tol:.1e}"
+            + (why() if why is not None else "")
         )
