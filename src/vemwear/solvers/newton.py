@@ -210,9 +210,9 @@ class CondensedNewton:
         at the contact nodes, ``max_a p'(y_a - w_a) omega_a (C_NN)_aa`` above 100 (the
         compliance slope times the body's own compliance there): a regime in which
         Newton's full steps can cycle between active sets of the soft layer (Example
-        5.2's data on 32 x 16 squares run at 210 with p = 1e4 r and cycle from 630 on,
-        p = 3e4 r) and the certificate of the recovered u amplifies its rounding by the
-        slope. Empty otherwise."""
+        5.2's data on 32 x 16 squares run with p = 1e4 r and cycle with p = 3e4 r) and
+        the certificate of the recovered u amplifies its rounding by the slope. Empty
+        otherwise."""
         s = self.system
         ratio = float(np.max(s.p.derivative(y - step.w) * s.weights * np.diag(self.C_NN)))
         if not ratio > 100.0:
