@@ -49,7 +49,10 @@ difference over the maximal wear (largest over the repeats). **Floor** is measur
 vemwear's child right after its timed run, on the same problem: the assembly of K, the
 factorization with the Schur block on the contact dofs and one block solve with a
 column per level (the linear algebra the run cannot do without); the table gives its
-median and vemwear's median compute time over it.
+median and vemwear's median compute time over it. A second table splits vemwear's
+compute time by phase (from ``result.timings``): before the time loop (mesh, problem,
+assembly, result arrays), the factorization with the Schur block, and the levels with
+the recovery of u.
 
 Threads: neither side is told anything by default (GetFEM's build has no OpenMP;
 MUMPS calls OpenBLAS, vemwear's default backend is PARDISO with MKL's threads where
@@ -228,7 +231,11 @@ solve(4, 2, 2)  # first-call set-up of the libraries is not compute time
 compute, pr, r = solve(a["nx"], a["ny"], a["steps"])
 mesh = pr.mesh
 np.savez(a["out"], x=r.contact_points[:, 0], w=r.wear[-1])
-print(json.dumps({"compute": compute, "floor": floor(pr, len(r.t)),
+# where the compute time goes: before the time loop (mesh, problem, assembly, result
+# arrays), the factorization with its Schur block, the levels with the recovery of u
+tm = r.timings
+phases = {"before": compute - tm["total"], "setup": tm["setup"], "loop": tm["time_loop"]}
+print(json.dumps({"compute": compute, "floor": floor(pr, len(r.t)), "phases": phases,
                   "iterations": int(r.iterations.sum()),
                   "dofs": 2 * len(mesh.points), "levels": len(r.t),
                   "backend": resolve_backend(a["backend"])}))
@@ -365,6 +372,7 @@ def main(argv: list[str] | None = None) -> int:
         with open(child, "w") as fh:
             fh.write(_GETFEM_CHILD)
         times = {n: {c: [] for c in cols} for n in args.sizes}
+        phases: dict[int, dict[str, list[float]]] = {n: {} for n in args.sizes}
         info: dict[int, dict] = {n: {"rel_max": 0.0, "rel_nodal": 0.0} for n in args.sizes}
         for n in args.sizes:
             _mesh_file(n, n // 2, args.steps, os.path.join(tmp, f"mesh{n}.npz"))
@@ -394,6 +402,8 @@ def main(argv: list[str] | None = None) -> int:
                     cols, (g["compute"], v["compute"], g_wall, v_wall, v["floor"]), strict=True
                 ):
                     times[n][c].append(val)
+                for k, val in v["phases"].items():
+                    phases[n].setdefault(k, []).append(val)
                 wmax, rel_max, rel_nodal = _agreement(vem_out, gf_out)
                 if g["dofs"] != v["dofs"]:
                     raise SystemExit(f"dofs differ: GetFEM {g['dofs']}, vemwear {v['dofs']}")
@@ -430,6 +440,17 @@ def main(argv: list[str] | None = None) -> int:
         "dmax = |max w_G - max w_V| / max w_V, dnodal = max |w_G - w_V| / max w_V at T "
         "(largest over the repeats)"
     )
+    print(
+        "vemwear's compute by phase, ms (medians): before the time loop (mesh, problem, "
+        "assembly, result arrays), the factorization with the Schur block "
+        "(result.timings['setup']), the levels with the recovery of u (['time_loop'])"
+    )
+    for n in args.sizes:
+        ph = {k: 1e3 * statistics.median(v) for k, v in phases[n].items()}
+        print(
+            f"{f'{n}x{n // 2}':>8}  before {ph['before']:8.2f}  set-up {ph['setup']:8.2f}"
+            f"  levels {ph['loop']:8.2f}  of {1e3 * statistics.median(times[n]['vem']):8.2f}"
+        )
     used = sorted({info[n]["backend"] for n in args.sizes})
     print(f"vemwear's backend: {', '.join(used)}; GetFEM's linear solver: {args.lsolver}")
     return 0

@@ -115,6 +115,7 @@ class TableCompliance(ComplianceLaw):
     r: tuple[float, ...]
     p: tuple[float, ...]
     _slopes: NDArray[np.float64] = field(init=False, repr=False, compare=False)
+    _offsets: NDArray[np.float64] = field(init=False, repr=False, compare=False)
     elementwise: ClassVar[bool] = True
     piecewise_linear: ClassVar[bool] = True
 
@@ -144,6 +145,7 @@ class TableCompliance(ComplianceLaw):
         object.__setattr__(self, "r", tuple(r.tolist()))
         object.__setattr__(self, "p", tuple(p.tolist()))
         object.__setattr__(self, "_slopes", slopes)
+        object.__setattr__(self, "_offsets", p[:-1] - slopes * r[:-1])  # p_k - s_k r_k
 
     @property
     def lipschitz(self) -> float:  # type: ignore[override]
@@ -165,10 +167,8 @@ class TableCompliance(ComplianceLaw):
     def segments(self, r: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         r = np.asarray(r, dtype=float)
         k = self._segment(r)
-        s = self._slopes[k]
-        q = np.asarray(self.p)[k] - s * np.asarray(self.r)[k]  # p_k - s_k r_k
         on = r > 0.0
-        return np.where(on, s, 0.0), np.where(on, q, 0.0)
+        return np.where(on, self._slopes[k], 0.0), np.where(on, self._offsets[k], 0.0)
 
     def describe(self) -> dict:
         return {"type": "table", "r": list(self.r), "p": list(self.p)}

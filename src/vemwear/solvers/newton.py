@@ -192,26 +192,29 @@ class CondensedNewton:
         product with the m x 2m block ``H``, no solve), so the scale does not depend on
         the displacement it certifies.
         """
-        s = self.system
-        w = s.weights[:, None]
-        P_soft = np.column_stack(p_softs)
-        x = np.vstack(
-            [
-                w * (P_soft + np.column_stack(p_rigids)),
-                w * np.column_stack([st.fric for st in steps]) * P_soft,
-            ]
-        )
-        D = self.H @ x
+        D = self.H @ np.vstack(self._layer_forces(steps, p_rigids, p_softs))
         D += np.column_stack(ys)
         return np.maximum(np.abs(D).max(axis=0), 1.0 / self.inv_g_ref)
+
+    def _layer_forces(
+        self, steps: list[StepData], p_rigids: list[NDArray], p_softs: list[NDArray]
+    ) -> tuple[NDArray, NDArray]:
+        """``W (p_soft + p_rigid)`` and ``W Fric p_soft`` of several levels, (m, k) each:
+        the weights of ``N^T`` and ``Tau^T`` in the layer forces (the ``x`` of the
+        condensed equation, level by level)."""
+        w = self.system.weights[:, None]
+        P_soft = np.column_stack(p_softs)
+        P = w * (P_soft + np.column_stack(p_rigids))
+        Q = w * np.column_stack([st.fric for st in steps]) * P_soft
+        return P, Q
 
     def stiffness_note(self, y: NDArray, step: StepData) -> str:
         """A note for an error message when the soft layer is much stiffer than the body
         at the contact nodes, ``max_a p'(y_a - w_a) omega_a (C_NN)_aa`` above 100 (the
         compliance slope times the body's own compliance there): a regime in which
         Newton's full steps can cycle between active sets of the soft layer (Example
-        5.2's data on 32 x 16 squares run with p = 1e4 r and cycle with p = 3e4 r) and
-        the certificate of the recovered u amplifies its rounding by the slope. Empty
+        5.2's data on 32 x 16 squares with p = 1e5 r, tests/test_solvers.py) and the
+        certificate of the recovered u amplifies its rounding by the slope. Empty
         otherwise."""
         s = self.system
         ratio = float(np.max(s.p.derivative(y - step.w) * s.weights * np.diag(self.C_NN)))
@@ -249,10 +252,7 @@ class CondensedNewton:
         # the right-hand sides F - N^T W (p_soft + p_rigid) - Tau^T W fric p_soft, built
         # in one Fortran-ordered block (the layout the solvers take, no copies) of a work
         # array kept from call to call (fresh memory of that size costs page faults)
-        P_soft = np.column_stack(p_softs)
-        w = s.weights[:, None]
-        P = w * (P_soft + np.column_stack(p_rigids))
-        Q = w * np.column_stack([st.fric for st in steps]) * P_soft
+        P, Q = self._layer_forces(steps, p_rigids, p_softs)
         if self._rhs.shape[1] < k:
             self._rhs = np.empty((s.n_free, k), order="F")
         rhs = self._rhs[:, :k]
@@ -284,10 +284,7 @@ class CondensedNewton:
     def predicts(self) -> bool:
         """Whether :meth:`predict` pays: a piecewise-linear law and at most 362 contact
         nodes (:data:`.pieces.MIN_WIDTH`)."""
-        law = self.system.p
-        return bool(getattr(law, "piecewise_linear", False)) and (
-            block_width(self.system.m) >= MIN_WIDTH
-        )
+        return self.system.p.piecewise_linear and block_width(self.system.m) >= MIN_WIDTH
 
     @property
     def predictor(self) -> PiecePredictor:
