@@ -179,14 +179,7 @@ def run_levels(
         U = d.full_dofs_block(X, [st.t for _, _, st, _ in pending], out=rows)
         for j, (n_, _, st, so) in enumerate(pending):
             full = fulls[j]
-            check_converged(
-                full,
-                opts.tol,
-                st,
-                "recovery of the displacement",
-                so.iterations,
-                lambda: step_solver.stiffness_note(so.u_nu, st),  # noqa: B023 (called here)
-            )
+            check_converged(full, opts.tol, st, "recovery of the displacement", so.iterations)
             res = np.array([full[k] for k in RESIDUAL_NAMES])
             give(n_, U[j], res)
         pending.clear()

@@ -209,12 +209,11 @@ class CondensedNewton:
         return P, Q
 
     def stiffness_note(self, y: NDArray, step: StepData) -> str:
-        """A note for an error message when the soft layer is much stiffer than the body
-        at the contact nodes, ``max_a p'(y_a - w_a) omega_a (C_NN)_aa`` above 100 (the
-        compliance slope times the body's own compliance there): a regime in which
+        """A note for Newton's error message when the soft layer is much stiffer than the
+        body at the contact nodes, ``max_a p'(y_a - w_a) omega_a (C_NN)_aa`` above 100
+        (the compliance slope times the body's own compliance there): a regime in which
         Newton's full steps can cycle between active sets of the soft layer (Example
-        5.2's data on 32 x 16 squares with p = 1e5 r, tests/test_solvers.py) and the
-        certificate of the recovered u amplifies its rounding by the slope. Empty
+        5.2's data on 32 x 16 squares with p = 1e5 r, tests/test_solvers.py). Empty
         otherwise."""
         s = self.system
         ratio = float(np.max(s.p.derivative(y - step.w) * s.weights * np.diag(self.C_NN)))
@@ -303,8 +302,10 @@ class CondensedNewton:
         """
         with self._threads():
             y, p_rigid, p_soft, it, errors = self._iterate(step, guess)
-        s = self.system
+        s, tol = self.system, self.options.tol
         res = dict(zip(RESIDUAL_NAMES, errors, strict=True))
+        why = lambda: self.stiffness_note(y, step)  # noqa: E731 (called on failure only)
+        check_converged(res, tol, step, "semismooth Newton (condensed)", it, why)
         p_rigid = np.maximum(p_rigid, 0.0)
         u = None
         if recover:
@@ -314,14 +315,7 @@ class CondensedNewton:
             res = kkt_residuals_block(s, [step], X, [p_rigid], scales)[0]
             u = X[:, 0]
             y = s.N @ u
-        check_converged(
-            res,
-            self.options.tol,
-            step,
-            "semismooth Newton (condensed)",
-            it,
-            lambda: self.stiffness_note(y, step),
-        )
+            check_converged(res, tol, step, "recovery of the displacement", it)
         return StepSolution(
             u=u, u_nu=y, p_rigid=p_rigid, p_soft=p_soft, iterations=it, residuals=res
         )

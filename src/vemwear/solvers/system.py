@@ -133,9 +133,42 @@ class ContactSystem:
         return self.N[:, cols].T.tocsr(), self.Tau[:, cols].T.tocsr()
 
     @cached_property
+    def K_row_sums(self) -> NDArray[np.float64]:
+        """The absolute row sums of K, for backward errors."""
+        return np.asarray(abs(self.K).sum(axis=1)).ravel()
+
+    @cached_property
     def K_norm(self) -> float:
         """``|K|``, the largest absolute row sum of K (max norm), for backward errors."""
-        return float(abs(self.K).sum(axis=1).max())
+        return float(self.K_row_sums.max())
+
+    @cached_property
+    def abs_force_operators(self) -> tuple[sp.csr_matrix, sp.csr_matrix, NDArray[np.float64]]:
+        """``|N^T|`` and ``|Tau^T|`` on the rows :attr:`contact_cols`, and the absolute
+        row sums of ``N``: the absolute row sums of the soft layer's tangent
+        ``N^T W P' N + Tau^T W Fric P' N`` are at most
+        ``|N^T| (w p' |N| 1) + |Tau^T| (w |fric| p' |N| 1)``."""
+        NT, TT = self.force_operators
+        nu_sum = np.asarray(abs(self.N_contact).sum(axis=1)).ravel()
+        return abs(NT).tocsr(), abs(TT).tocsr(), nu_sum
+
+    def operator_norms(self, R: NDArray, fric: NDArray) -> NDArray[np.float64]:
+        """``| |K| + |J_soft| |`` (max norm) at each of k levels: the norm of the
+        operator ``u -> K u + force(u)`` linearized at penetrations ``R`` (k, m) with
+        friction coefficients ``fric`` (m, k), J_soft the soft layer's tangent
+        ``N^T W P' N + Tau^T W Fric P' N``. It is ``|K|`` where no node penetrates."""
+        k = R.shape[0]
+        if self.p.elementwise:
+            dP = self.p.derivative(R).T
+        else:
+            dP = np.column_stack([self.p.derivative(R[j]) for j in range(k)])
+        if not np.any(dP):
+            return np.full(k, self.K_norm)
+        aNT, aTT, nu_sum = self.abs_force_operators
+        t = (self.weights * nu_sum)[:, None] * dP
+        rows = aNT @ t + aTT @ (np.abs(fric) * t)
+        rows += self.K_row_sums[self.contact_cols][:, None]
+        return np.maximum(rows.max(axis=0), self.K_norm)
 
     @property
     def n_free(self) -> int:
@@ -238,11 +271,17 @@ def kkt_residuals_block(
 
     Feasibility and complementarity are exact, level by level (they need only ``N X``).
     The recovery is a direct solve with the contact forces known, so its equilibrium
-    residual is measured as the solve's normwise backward error: ``|r|`` over
-    ``max(|F|, |force|, |K| |x|)`` (max norms; ``|K|`` the largest absolute row sum),
-    which does not grow with the condition number of K as the force-scaled residual of
-    :func:`kkt_residuals` does (at h = 1/512 that one reaches 1e-10 on a backward-stable
-    solve). The residuals ``E = K X - F + force`` are not formed column by column
+    residual is measured as a normwise backward error: ``|r|`` over
+    ``max(|F|, |force|, |J| x_ref)`` (max norms), which does not grow with the
+    condition number of K as the force-scaled residual of :func:`kkt_residuals` does (at
+    h = 1/512 that one reaches 1e-10 on a backward-stable solve). ``|J|`` is the norm of
+    the operator ``u -> K u + force(u)`` at the level
+    (:meth:`ContactSystem.operator_norms`: ``|K|`` plus the soft layer's tangent, the
+    larger part for a stiff layer, whose slope turns the rounding of y into forces) and
+    ``x_ref = max(max |x|, y_ref)``: the displacement a residual stands for is measured
+    on the scale of the normal displacements, as feasibility is (the recovery's forces
+    come from Newton's y, which carries rounding on that scale). The residuals
+    ``E = K X - F + force`` are not formed column by column
     (k products with K): for k > :data:`PROBES` they are checked on ``PROBES`` random
     combinations of the columns (Freivalds' check), ``E Z`` with Gaussian ``Z`` (k,
     PROBES), whose columns are scaled by each level's force scale. Every entry of ``E Z``
@@ -277,9 +316,12 @@ def kkt_residuals_block(
     for st in steps:
         if id(st.F) not in F_max:
             F_max[id(st.F)] = float(np.abs(st.F).max(initial=0))
+    x_ref = np.maximum(X.max(axis=0), -X.min(axis=0))  # max |X|, no temporary
+    if y_refs is not None:
+        x_ref = np.maximum(x_ref, y_refs)
     scale = np.maximum(
         np.maximum([F_max[id(st.F)] for st in steps], np.abs(force).max(axis=0, initial=0)),
-        system.K_norm * np.maximum(X.max(axis=0), -X.min(axis=0)),  # max |X|, no temporary
+        system.operator_norms(R, fric) * x_ref,
     )
     scale = np.maximum(scale, _TINY)
     if k <= PROBES:
