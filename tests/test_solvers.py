@@ -377,6 +377,29 @@ def test_a_stiff_coating_is_certified_by_the_backward_error_of_its_operator(c, m
         assert rel(run.u, full.u) < 1e-9 and rel(run.wear, full.wear) < 1e-9
 
 
+def test_newton_stops_at_the_rounding_floor_of_its_residual():
+    """A strip 64 times as long as it is thick, clamped at one end: the load alone would
+    move it 1.1e5 times g, so the condensed residual's rounding (about 1e-16 of that)
+    stays above 0.1 tol, the iteration's own target. Newton stops once two steps in a
+    row were on one piece and the residual is within tol (it took the 100 iterations
+    of max_iter at every level before); the run is certified and agrees with the
+    full-space Newton in the wear to 1e-8 (the displacements to 2e-4: u is the small
+    difference of terms 7e4 times as large, and the solvers' forward errors differ)."""
+    pr = paper_problem(divisions=(128, 2), steps=4)
+    pr = dataclasses.replace(pr, mesh=tag_rectangle(rectangle_squares((16.0, 0.25), (128, 2))))
+    solver = pr.discrete.step_solver(SolverOptions("newton"))
+    step = pr.discrete.step_data(0, np.zeros(pr.discrete.system.m))
+    assert np.abs(solver.normal_displacement(step.F)).max() > 1e5 * 0.1
+    r = simulate(pr, "newton")
+    full = simulate(pr, "newton-full")
+    assert r.iterations.max() <= 4 and r.residuals.max() < 1e-10
+    assert rel(r.wear, full.wear) < 1e-7 and rel(r.u, full.u) < 1e-3
+    # a tolerance below rounding: Newton stops after four steps on one piece and says so
+    # (not after max_iter)
+    with pytest.raises(ConvergenceError, match=r"level 0 .* after [1-6] iterations"):
+        simulate(paper_problem(steps=2), SolverOptions("newton", tol=1e-18))
+
+
 def test_a_soft_layer_much_stiffer_than_the_body_is_named_when_newton_fails():
     """p = 1e5 r on Example 5.2's data: Newton's full steps cycle between active sets of
     the soft layer; the error says so, with the stiffness ratio, instead of a bare

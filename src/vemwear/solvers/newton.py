@@ -40,6 +40,10 @@ from .system import (
 )
 from .threads import solver_threads
 
+#: Newton steps in a row on one piece after which the condensed iteration stops
+#: (:meth:`CondensedNewton._iterate`).
+_STALL = 4
+
 
 @dataclass(frozen=True)
 class NewtonOptions:
@@ -343,6 +347,12 @@ class CondensedNewton:
         inv_g = self.inv_g_ref
         stop = 0.1 * opt.tol
         it = 0
+        # steps in a row on one piece (active set, slopes): the iterate after such a
+        # step solves the piece's linear system, and a second one refines it; past
+        # that only rounding changes, so an iterate within tol is final, and one above
+        # it after STALL steps will not get there (a residual floor above 0.1 tol: a
+        # load that moves the body 1e5 times g, or a very stiff layer)
+        last, same = None, 0
         while True:
             r = y - wear
             p_soft = law(r)
@@ -359,6 +369,10 @@ class CondensedNewton:
             active = p_rigid + c_ncp * (y - g) > 0.0
             dp = law.derivative(r)
             red = self.reduced_matrix(active, dp, fric)
+            same = same + 1 if red is last else 0
+            last = red
+            if (same >= 2 and max(errors) <= opt.tol) or same >= _STALL:
+                return y, p_rigid, p_soft, it - 1, errors
             # no active node (the body off the rigid layer, the usual case): the masks
             # give dy_A = 0 and dp_I = p_rigid, without the array passes
             any_active = np.count_nonzero(active) > 0
