@@ -198,8 +198,13 @@ def test_time_dependent_velocity_and_table_law():
 
 def test_nonconvergence_raises_with_level():
     pr = paper_problem(divisions=(8, 4), steps=4)
-    with pytest.raises(ConvergenceError, match=r"time level \d+ \(t = "):
+    with pytest.raises(ConvergenceError, match=r"time level \d+ \(t = ") as err:
         simulate(pr, SolverOptions("uzawa", max_iter=3))
+    assert "contracts" not in str(err.value)  # the paper's layer: no note
+    # a layer 1e6 times as stiff: Uzawa's fixed point contracts too slowly, and says so
+    stiff = paper_problem(divisions=(8, 4), steps=4, p=LinearCompliance(4e5))
+    with pytest.raises(ConvergenceError, match=r"contracts by 1 - 1/[0-9.e+]+ per iter"):
+        simulate(stiff, SolverOptions("uzawa", max_iter=100))
 
 
 def test_time_grids():

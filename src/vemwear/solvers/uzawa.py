@@ -69,6 +69,19 @@ class Uzawa:
             val = val_new
         return 1.05 * val  # a margin: the estimate approaches from below
 
+    def stiffness_note(self) -> str:
+        """A note for the error message when the soft layer's fixed point contracts
+        slowly: by ``1 - rho_2`` per iteration, ``1 / rho_2 = 1 + L_p ||weights C_NN||``
+        above 1000 (a soft layer that much stiffer than the body). Empty otherwise."""
+        ratio = 1.0 / self.rho2
+        if not ratio > 1000.0:
+            return ""
+        return (
+            f"; the soft layer's fixed point contracts by 1 - 1/{ratio:.3g} per iteration "
+            "(1 + L_p |omega C_NN|: a layer much stiffer than the body), which the "
+            "condensed Newton (solver newton) does not depend on"
+        )
+
     def solve(
         self, step: StepData, guess: StepSolution | None = None, recover: bool = True
     ) -> StepSolution:
@@ -90,7 +103,7 @@ class Uzawa:
             p_rigid = np.maximum(0.0, p_rigid + self.rho1 * (y - s.g))
             q = q + self.rho2 * (s.p(y - step.w) - q)
         res = kkt_residuals(s, step, u, p_rigid)
-        check_converged(res, opt.tol, step, "Uzawa", it)
+        check_converged(res, opt.tol, step, "Uzawa", it, self.stiffness_note)
         y = s.N @ u
         return StepSolution(
             u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=it, residuals=res
