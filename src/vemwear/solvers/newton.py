@@ -215,9 +215,10 @@ class CondensedNewton:
     def stiffness_note(self, y: NDArray, step: StepData) -> str:
         """A note for Newton's error message when the soft layer is much stiffer than the
         body at the contact nodes, ``max_a p'(y_a - w_a) omega_a (C_NN)_aa`` above 100
-        (the compliance slope times the body's own compliance there): a regime in which
-        Newton's full steps can cycle between active sets of the soft layer (Example
-        5.2's data on 32 x 16 squares with p = 1e5 r, tests/test_solvers.py). Empty
+        (the compliance slope times the body's own compliance there): Newton's steps
+        can then cycle between pieces even from the cold start, and the slope turns the
+        rounding of y into a condensed residual that grows with the ratio (Example
+        5.2's data with p = 1e8 r: above tol, tests/test_solvers.py). Empty
         otherwise."""
         s = self.system
         ratio = float(np.max(s.p.derivative(y - step.w) * s.weights * np.diag(self.C_NN)))
@@ -225,7 +226,8 @@ class CondensedNewton:
             return ""
         return (
             f"; the soft layer is {ratio:.3g} times as stiff as the body at the contact "
-            "nodes (p' omega C_NN), where Newton's full steps can cycle"
+            "nodes (p' omega C_NN), where Newton's steps can cycle and the slope turns "
+            "the rounding of N u into residuals"
         )
 
     def reduced_matrix(self, active: NDArray, dp: NDArray, fric: NDArray) -> _ReducedMatrix:
@@ -332,12 +334,30 @@ class CondensedNewton:
         the active and ``dp_rigid = -p_rigid`` on the inactive set (the linearization of
         R, ``J11 = I + M D``); when the active set is the same as at the previous
         iterate, these prescribed parts are zero and the right-hand side is ``-R``.
+
+        Started from ``guess`` (the previous level), the iteration can cycle between
+        pieces when the solution moved far from it (a soft layer much stiffer than the
+        body with wear steps that overshoot): when a piece comes back that is not the
+        last one, it starts again from the cold start ``y = min(d, g)``,
+        ``p_rigid = 0``, within the same ``max_iter``.
         """
-        s, opt = self.system, self.options
         d = self.normal_displacement(step.F)
+        if guess is None:
+            return self._newton(step, d, None, 0)[:5]
+        start = (np.array(guess.u_nu, copy=True), np.array(guess.p_rigid, copy=True))
+        out = self._newton(step, d, start, 0)
+        if out[5]:  # a cycle: once more from the cold start
+            out = self._newton(step, d, None, out[3])
+        return out[:5]
+
+    def _newton(self, step: StepData, d: NDArray, start: tuple | None, it: int):
+        """:meth:`_iterate` from ``start`` (y, p_rigid), or from the cold start if None,
+        counting iterations from ``it``; returns also whether it stopped at a cycle (a
+        piece seen before, not the last one: only from a given start)."""
+        s, opt = self.system, self.options
         g, c_ncp, wear, fric, law = s.g, s.c_ncp, step.w, step.fric, s.p
-        if guess is not None:
-            y, p_rigid = np.array(guess.u_nu, copy=True), np.array(guess.p_rigid, copy=True)
+        if start is not None:
+            y, p_rigid = start
         else:
             y, p_rigid = np.minimum(d, g), np.zeros(s.m)
         w, H, x, x_n, x_t, buf = s.weights, self.H, self._x, self._x_n, self._x_t, self._buf
@@ -346,7 +366,7 @@ class CondensedNewton:
         wf = self._wf[1]
         inv_g = self.inv_g_ref
         stop = 0.1 * opt.tol
-        it = 0
+        seen: set[bytes] = set()  # the pieces left (their active sets and slopes)
         # steps in a row on one piece (active set, slopes): the iterate after such a
         # step solves the piece's linear system, and a second one refines it; past
         # that only rounding changes, so an iterate within tol is final, and one above
@@ -364,15 +384,23 @@ class CondensedNewton:
             R -= d
             errors = _condensed_errors(y, p_rigid, R, g, inv_g, buf)
             if max(errors) <= stop or it == opt.max_iter:
-                return y, p_rigid, p_soft, it, errors
+                return y, p_rigid, p_soft, it, errors, False
             it += 1
             active = p_rigid + c_ncp * (y - g) > 0.0
             dp = law.derivative(r)
             red = self.reduced_matrix(active, dp, fric)
-            same = same + 1 if red is last else 0
+            if red is last:
+                same += 1
+                if (same >= 2 and max(errors) <= opt.tol) or same >= _STALL:
+                    return y, p_rigid, p_soft, it - 1, errors, False
+            else:
+                same = 0
+                if start is not None and it > 2:  # (the usual level takes one or two)
+                    piece = active.tobytes() + dp.tobytes()
+                    if piece in seen:
+                        return y, p_rigid, p_soft, it - 1, errors, True
+                    seen.add(piece)
             last = red
-            if (same >= 2 and max(errors) <= opt.tol) or same >= _STALL:
-                return y, p_rigid, p_soft, it - 1, errors
             # no active node (the body off the rigid layer, the usual case): the masks
             # give dy_A = 0 and dp_I = p_rigid, without the array passes
             any_active = np.count_nonzero(active) > 0
