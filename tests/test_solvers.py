@@ -264,7 +264,10 @@ def test_block_equilibrium_check_estimates_and_catches_a_wrong_column():
     def backward_error(j: int, x: np.ndarray) -> float:
         force, _ = s.contact_force(x, rig[j], steps[j].fric, steps[j].w)
         r = s.K @ x - steps[j].F + force
-        scale = max(np.abs(steps[j].F).max(), np.abs(force).max(), K_norm * np.abs(x).max())
+        pen = (s.N @ x - steps[j].w)[None, :]  # |J|: |K| and the soft layer's tangent
+        J = s.operator_norms(pen, steps[j].fric[:, None])[0]
+        assert K_norm <= J < 1.01 * K_norm  # the paper's soft layer: a small part of it
+        scale = max(np.abs(steps[j].F).max(), np.abs(force).max(), J * np.abs(x).max())
         return float(np.abs(r).max() / scale)
 
     block = kkt_residuals_block(s, steps, X, rig)
@@ -272,6 +275,10 @@ def test_block_equilibrium_check_estimates_and_catches_a_wrong_column():
     assert all(r["equilibrium"] == est for r in block)  # one estimate for the block
     exact = max(backward_error(j, X[:, j]) for j in range(len(steps)))
     assert exact < 1e-14 and est < 1e-13
+    # with a tolerance below the estimate: each level's own residual, exactly
+    each = kkt_residuals_block(s, steps, X, rig, tol=est / 2)
+    for j in range(len(steps)):
+        assert each[j]["equilibrium"] == pytest.approx(backward_error(j, X[:, j]), rel=1e-9)
     for j in range(len(steps)):  # feasibility and complementarity are exact
         full = kkt_residuals(s, steps[j], X[:, j], rig[j])
         for key in ("feasibility", "complementarity"):
@@ -282,6 +289,8 @@ def test_block_equilibrium_check_estimates_and_catches_a_wrong_column():
         true = backward_error(bad, Y[:, bad])
         got = kkt_residuals_block(s, steps, Y, rig)[0]["equilibrium"]
         assert true > 1e-8 and true / 100 < got < true * len(steps), (bad, true, got)
+        each = kkt_residuals_block(s, steps, Y, rig, tol=1e-10)  # the wrong one named
+        assert [r["equilibrium"] > 1e-10 for r in each] == [j == bad for j in range(len(Y.T))]
 
 
 def test_a_slender_bar_is_certified_over_the_scale_of_its_normal_displacements():

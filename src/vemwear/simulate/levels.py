@@ -174,7 +174,7 @@ def run_levels(
         y_refs = step_solver.displacement_scales(
             steps, [so.u_nu for *_, so in pending], p_rigids, p_softs
         )
-        fulls = kkt_residuals_block(sysm, steps, X, p_rigids, y_refs)
+        fulls = kkt_residuals_block(sysm, steps, X, p_rigids, y_refs, opts.tol)
         rows = sink_rows([n_ for n_, *_ in pending]) if sink_rows is not None else None
         U = d.full_dofs_block(X, [st.t for _, _, st, _ in pending], out=rows)
         for j, (n_, _, st, so) in enumerate(pending):
