@@ -264,8 +264,8 @@ def test_block_equilibrium_check_estimates_and_catches_a_wrong_column():
     def backward_error(j: int, x: np.ndarray) -> float:
         force, _ = s.contact_force(x, rig[j], steps[j].fric, steps[j].w)
         r = s.K @ x - steps[j].F + force
-        pen = (s.N @ x - steps[j].w)[None, :]  # |J|: |K| and the soft layer's tangent
-        J = s.operator_norms(pen, steps[j].fric[:, None])[0]
+        slopes = s.p.derivative(s.N @ x - steps[j].w)  # |J|: |K| and the soft layer's
+        J = s.operator_norms(slopes[:, None], steps[j].fric[:, None])[0]
         assert K_norm <= J < 1.01 * K_norm  # the paper's soft layer: a small part of it
         scale = max(np.abs(steps[j].F).max(), np.abs(force).max(), J * np.abs(x).max())
         return float(np.abs(r).max() / scale)
@@ -335,6 +335,10 @@ def test_a_slender_bar_is_certified_over_the_scale_of_its_normal_displacements()
     # the soft layer's forces (the equilibrium residual is over |J| max(|u|, |d|)); the
     # two solvers' u differ by about |d| / |u| times their backward errors
     strip = dataclasses.replace(pr, mesh=tag_rectangle(rectangle_squares((8.0, 0.25), (64, 2))))
+    sd = strip.discrete
+    strip_step = sd.step_data(0, np.zeros(sd.system.m))
+    strip_d = sd.step_solver(SolverOptions("newton")).normal_displacement(strip_step.F)
+    assert np.abs(strip_d).max() > 6e3 * s.g.max()
     for case, u_tol in ((pr, 1e-9), (dataclasses.replace(pr, order=2), 1e-9), (bar3d, 1e-9),
                         (strip, 1e-6)):  # fmt: skip
         r = simulate(case, "newton")  # u recovered and certified at every level
@@ -363,12 +367,12 @@ def test_a_stiff_coating_is_certified_by_the_backward_error_of_its_operator(c, m
     X = solver.recover_many([step], [sol.p_rigid], [sol.p_soft])
     x = X[:, 0]
     # the operator's norm against its dense form: max row sum of |K| + |J_soft|
-    r = (s.N @ x - step.w)[None, :]
-    dp = s.p.derivative(r[0]) * s.weights
+    slopes = s.p.derivative(s.N @ x - step.w)
+    dp = slopes * s.weights
     N, Tau = s.N.toarray(), s.Tau.toarray()
     J_soft = np.abs(N.T * dp) @ np.abs(N) + np.abs(Tau.T * (dp * step.fric)) @ np.abs(N)
     dense = (np.abs(s.K.toarray()) + J_soft).sum(axis=1).max()
-    norm = s.operator_norms(r, step.fric[:, None])[0]
+    norm = s.operator_norms(slopes[:, None], step.fric[:, None])[0]
     assert norm == pytest.approx(dense, rel=1e-12) and norm > 20 * s.K_norm
     # the backward error over |K| |u| alone (as if the soft layer were not part of the
     # operator) fails; over the operator's norm it is at rounding level

@@ -143,31 +143,30 @@ class ContactSystem:
         return float(self.K_row_sums.max())
 
     @cached_property
-    def abs_force_operators(self) -> tuple[sp.csr_matrix, sp.csr_matrix, NDArray[np.float64]]:
-        """``|N^T|`` and ``|Tau^T|`` on the rows :attr:`contact_cols`, and the absolute
-        row sums of ``N``: the absolute row sums of the soft layer's tangent
+    def abs_force_operators(
+        self,
+    ) -> tuple[sp.csr_matrix, sp.csr_matrix, NDArray[np.float64], NDArray[np.float64]]:
+        """What :meth:`operator_norms` needs: ``|N^T|`` and ``|Tau^T|`` on the rows
+        :attr:`contact_cols`, the absolute row sums of ``N``, and those of K on the rows
+        :attr:`contact_cols`. The absolute row sums of the soft layer's tangent
         ``N^T W P' N + Tau^T W Fric P' N`` are at most
         ``|N^T| (w p' |N| 1) + |Tau^T| (w |fric| p' |N| 1)``."""
         NT, TT = self.force_operators
         nu_sum = np.asarray(abs(self.N_contact).sum(axis=1)).ravel()
-        return abs(NT).tocsr(), abs(TT).tocsr(), nu_sum
+        return abs(NT).tocsr(), abs(TT).tocsr(), nu_sum, self.K_row_sums[self.contact_cols]
 
-    def operator_norms(self, R: NDArray, fric: NDArray) -> NDArray[np.float64]:
+    def operator_norms(self, dP: NDArray, fric: NDArray) -> NDArray[np.float64]:
         """``| |K| + |J_soft| |`` (max norm) at each of k levels: the norm of the
-        operator ``u -> K u + force(u)`` linearized at penetrations ``R`` (k, m) with
-        friction coefficients ``fric`` (m, k), J_soft the soft layer's tangent
-        ``N^T W P' N + Tau^T W Fric P' N``. It is ``|K|`` where no node penetrates."""
-        k = R.shape[0]
-        if self.p.elementwise:
-            dP = self.p.derivative(R).T
-        else:
-            dP = np.column_stack([self.p.derivative(R[j]) for j in range(k)])
+        operator ``u -> K u + force(u)`` linearized where the law's slopes are ``dP``
+        (m, k), with friction coefficients ``fric`` (m, k), J_soft the soft layer's
+        tangent ``N^T W P' N + Tau^T W Fric P' N``. It is ``|K|`` where no node
+        penetrates."""
         if not np.any(dP):
-            return np.full(k, self.K_norm)
-        aNT, aTT, nu_sum = self.abs_force_operators
+            return np.full(dP.shape[1], self.K_norm)
+        aNT, aTT, nu_sum, K_rows = self.abs_force_operators
         t = (self.weights * nu_sum)[:, None] * dP
         rows = aNT @ t + aTT @ (np.abs(fric) * t)
-        rows += self.K_row_sums[self.contact_cols][:, None]
+        rows += K_rows[:, None]
         return np.maximum(rows.max(axis=0), self.K_norm)
 
     @property
@@ -252,6 +251,13 @@ def _by_load(steps: list[StepData], Z: NDArray) -> list[tuple[NDArray, NDArray]]
     return [(steps[rows[0]].F, Z[rows].sum(axis=0)) for rows in groups.values()]
 
 
+def _by_level(f: Callable[[NDArray], NDArray], R: NDArray, elementwise: bool) -> NDArray:
+    """``f`` (the law or its slope) of the penetrations ``R`` (k, m) of k levels, as
+    (m, k): on all rows at once when the law is elementwise, else row by row, as
+    :func:`kkt_residuals` applies it to one level."""
+    return f(R).T if elementwise else np.column_stack([f(r) for r in R])
+
+
 #: Random combinations of a block's levels in :func:`kkt_residuals_block`.
 PROBES = 3
 
@@ -304,10 +310,7 @@ def kkt_residuals_block(
     R = np.empty((k, m))
     for j, st in enumerate(steps):
         np.subtract(NX[:, j], st.w, out=R[j])
-    if system.p.elementwise:
-        P_soft = system.p(R).T
-    else:
-        P_soft = np.column_stack([system.p(R[j]) for j in range(k)])
+    P_soft = _by_level(system.p, R, system.p.elementwise)
     fric = np.column_stack([st.fric for st in steps])
     w = system.weights[:, None]
     # the contact forces live on the contact dofs: N^T a + Tau^T b restricted to them
@@ -324,7 +327,8 @@ def kkt_residuals_block(
         x_ref = np.maximum(x_ref, y_refs)
     scale = np.maximum(
         np.maximum([F_max[id(st.F)] for st in steps], np.abs(force).max(axis=0, initial=0)),
-        system.operator_norms(R, fric) * x_ref,
+        system.operator_norms(_by_level(system.p.derivative, R, system.p.elementwise), fric)
+        * x_ref,
     )
     scale = np.maximum(scale, _TINY)
 
