@@ -155,34 +155,36 @@ def test_pushed_at_a_rate_converges_to_the_continuous_wear() -> None:
 
 
 def test_free_rigid_motions_are_named() -> None:
+    """Rollers u_y = 0 on the left side: contact on the bottom holds the translation in y
+    and the rotation (load control), not the translation in x, which the message names."""
     mesh = select_parts(
         rectangle_squares((W, H), (4, 2)), {"rollers": "left", "contact": "bottom", "free": "rest"}
     )
-    with pytest.raises(ValueError, match="leave rigid motions free: the translation in y"):
+    with pytest.raises(ValueError, match="leave rigid motions free: the translation in x; clamp"):
         Problem(
             mesh,
             Material(LAM, ETA),
             TimeGrid.uniform(1.0, 2),
             clamped=(),
-            displacement=(Prescribed("rollers", ux=0.0),),
+            displacement=(Prescribed("rollers", uy=0.0),),
         )
 
 
-def test_free_rotation_is_named() -> None:
-    """u_x = 0 on the bottom only: the body may still move up and turn about any point
-    of the bottom; the message names both."""
+def test_rigid_motions_held_by_contact_are_accepted() -> None:
+    """u_x = 0 on the bottom only, contact on the top: the body may move up and turn
+    about any point of the bottom, which the top's contact normals resist (load
+    control); without any constraint the translation in x stays free."""
     mesh = select_parts(
         rectangle_squares((W, H), (4, 2)), {"rollers": "bottom", "contact": "top", "free": "rest"}
     )
-    with pytest.raises(
-        ValueError,
-        match=r"leave rigid motions free: the rotation about \(1, 0\), the translation in y; "
-        r"clamp a part",
-    ):
-        Problem(
-            mesh,
-            Material(LAM, ETA),
-            TimeGrid.uniform(1.0, 2),
-            clamped=(),
-            displacement=(Prescribed("rollers", ux=0.0),),
-        )
+    pr = Problem(
+        mesh,
+        Material(LAM, ETA),
+        TimeGrid.uniform(1.0, 2),
+        clamped=(),
+        displacement=(Prescribed("rollers", ux=0.0),),
+    )
+    assert pr.rigid_basis.shape == (2, 3)
+    assert pr.held_by_contact_check().shape == (0, 3)
+    with pytest.raises(ValueError, match="leave rigid motions free: the translation in x; clamp"):
+        Problem(mesh, Material(LAM, ETA), TimeGrid.uniform(1.0, 2), clamped=())

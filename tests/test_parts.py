@@ -117,13 +117,14 @@ def test_free_rigid_motion_is_named_at_the_boundary_key() -> None:
         boundary={
             "contact": "bottom",
             "free": "rest",
-            "displacement": [{"name": "rollers", "on": "left", "ux": 0.0}],
+            "displacement": [{"name": "rollers", "on": "left", "uy": 0.0}],
         }
     )
+    # contact holds the body along its normal (y) and the rotation; not along x
     with pytest.raises(
         ConfigError,
         match=r"^c.toml: \[boundary\] the boundary conditions "
-        r"leave rigid motions free: the translation in y; clamp a part",
+        r"leave rigid motions free: the translation in x; clamp a part",
     ):
         parse(d)
 

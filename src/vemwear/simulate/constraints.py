@@ -160,58 +160,69 @@ class Constraints:
                     out[sel] = float(spec)
         return out
 
+    def rigid_motion_matrix(self, X: NDArray[np.float64], c: NDArray[np.int64]) -> NDArray:
+        """The rigid motions at points ``X`` (n, d) in components ``c`` (n,): an (n, 3)
+        matrix in 2D (translations in x and y, the rotation about the vertex mean, scaled
+        by the mesh size) and (n, 6) in 3D (three translations, three rotations). Its
+        columns are the coordinates of :meth:`free_rigid_basis`."""
+        P = self.mesh.points
+        centre = P.mean(axis=0)
+        L = float(np.ptp(P, axis=0).max()) or 1.0
+        if self.dim == 3:
+            Y = (X - centre) / L
+            A = np.zeros((len(c), 6))
+            A[np.arange(len(c)), c] = 1.0
+            for k in range(3):  # rotation about axis k: e_k x (x - centre)
+                rot = np.cross(np.eye(3)[k], Y)
+                A[:, 3 + k] = rot[np.arange(len(c)), c]
+            return A
+        A = np.zeros((len(c), 3))
+        A[c == 0, 0] = 1.0
+        A[c == 1, 1] = 1.0
+        A[:, 2] = np.where(c == 0, -(X[:, 1] - centre[1]), X[:, 0] - centre[0]) / L
+        return A
+
+    def free_rigid_basis(self) -> NDArray[np.float64]:
+        """An orthonormal basis (r, 3) in 2D or (r, 6) in 3D of the rigid motions the
+        constraints leave free, in the coordinates of :meth:`rigid_motion_matrix`: the
+        null space of the rigid motions at the constrained dofs (a rigid motion is
+        linear, so its dof, a vertex value or a mean over an edge or a cell, is its value
+        at the dof's point)."""
+        n_rigid = 6 if self.dim == 3 else 3
+        if len(self.dofs) == 0:
+            return np.eye(n_rigid)
+        A = self.rigid_motion_matrix(self.space.dof_points[self.dofs], self.dofs % self.dim)
+        _, sv, Vt = np.linalg.svd(A, full_matrices=True)
+        rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0)), 1e-300)))
+        return np.asarray(Vt[rank:])
+
+    def rigid_modes(self, basis: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The rigid motions ``basis`` (r, 3 or 6) as dof vectors, (n_dofs, r)."""
+        dofs = np.arange(self.space.n_dofs)
+        return self.rigid_motion_matrix(self.space.dof_points, dofs % self.dim) @ basis.T
+
     def free_rigid_motions(self) -> list[str]:
         """The rigid motions the constraints leave free, described in words (empty if
         none): translations in x and y and rotations about a point (3D: the six rigid
         motions, translations along and rotations about axes)."""
-        if self.dim == 3:
-            return self._free_rigid_motions3d()
-        P = self.mesh.points
-        centre = P.mean(axis=0)
-        L = float(np.ptp(P, axis=0).max()) or 1.0
-        # a rigid motion is linear: its dof (a vertex value or a mean over an edge or a
-        # cell) is its value at the dof's point
-        X, c = self.space.dof_points[self.dofs], self.dofs % 2
-        A = np.zeros((len(self.dofs), 3))
-        A[c == 0, 0] = 1.0
-        A[c == 1, 1] = 1.0
-        A[:, 2] = np.where(c == 0, -(X[:, 1] - centre[1]), X[:, 0] - centre[0]) / L
-        if len(A) == 0:
-            return ["translations in x and y and the rotation"]
-        _, sv, Vt = np.linalg.svd(A, full_matrices=True)
-        rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0)), 1e-300)))
-        if rank == 3:
-            return []
-        null = Vt[rank:]
-        if len(null) >= 2:
-            return (
-                ["translations in x and y and the rotation"]
-                if len(null) == 3
-                else [_motion(n, centre, L) for n in null]
-            )
-        return [_motion(null[0], centre, L)]
+        return describe_motions(self.mesh, self.free_rigid_basis())
 
-    def _free_rigid_motions3d(self) -> list[str]:
-        """The free rigid motions in 3D: the null space of the six rigid motions
-        (three translations, three rotations about the centre) at the constrained dofs."""
-        P = self.mesh.points
-        centre = P.mean(axis=0)
-        L = float(np.ptp(P, axis=0).max()) or 1.0
-        X, c = (self.space.dof_points[self.dofs] - centre) / L, self.dofs % 3
-        A = np.zeros((len(self.dofs), 6))
-        A[np.arange(len(c)), c] = 1.0
-        for k in range(3):  # rotation about axis k: e_k x (x - centre)
-            rot = np.cross(np.eye(3)[k], X)
-            A[:, 3 + k] = rot[np.arange(len(c)), c]
-        if len(A) == 0:
+
+def describe_motions(mesh: Mesh | Mesh3D, null: NDArray[np.float64]) -> list[str]:
+    """Words for the rigid motions spanned by the rows of ``null`` (coordinates of
+    :meth:`Constraints.rigid_motion_matrix`)."""
+    P = mesh.points
+    centre = P.mean(axis=0)
+    L = float(np.ptp(P, axis=0).max()) or 1.0
+    if len(null) == 0:
+        return []
+    if P.shape[1] == 3:
+        if len(null) == 6:
             return ["the three translations and the three rotations"]
-        _, sv, Vt = np.linalg.svd(A, full_matrices=True)
-        rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0)), 1e-300)))
-        if rank == 6:
-            return []
-        if rank == 0:
-            return ["the three translations and the three rotations"]
-        return [_motion3d(n, centre, L) for n in Vt[rank:]]
+        return [_motion3d(n, centre, L) for n in null]
+    if len(null) == 3:
+        return ["translations in x and y and the rotation"]
+    return [_motion(n, centre, L) for n in null]
 
 
 def _motion(n: NDArray[np.float64], centre: NDArray[np.float64], L: float) -> str:

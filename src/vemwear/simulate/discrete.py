@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from ..contact import ContactBoundary, tangential_velocity, velocity_levels
 from ..solvers.system import ContactSystem, StepData, StepSolution
+from .constraints import describe_motions
 
 if TYPE_CHECKING:
     from .problem import Problem
@@ -116,6 +117,9 @@ class Discretization:
             dof_points = space.dof_points[self.free]
         shift = self.gap - self.offset
         self.shift = shift if np.any(shift != 0.0) else None
+        # load control: the rigid motions that only contact holds (docs/method.md 1c)
+        basis = problem.rigid_basis
+        rigid = con.rigid_modes(basis)[self.free] if len(basis) else None
         self.system = ContactSystem(
             K=K,
             contact_dofs=cdofs,
@@ -126,6 +130,9 @@ class Discretization:
             p=problem.law,
             dof_points=dof_points,
             trace=trace,
+            rigid=rigid,
+            rigid_names=tuple(describe_motions(mesh, basis)) if rigid is not None else (),
+            contact_names=tuple(cb.part_names),
         )
         #: whether the load F of the step problems is the same at all times (then
         #: :meth:`load` gives one array object)
@@ -369,6 +376,10 @@ class Discretization:
             factor = getattr(solver, "factor", None)
             if factor is not None:
                 Z = factor.solve(B)
+            elif s.rigid is not None:  # G of the anchored K (docs/method.md 1c)
+                from ..solvers.rigid import anchored_factor, rigid_modes
+
+                Z = anchored_factor(s, rigid_modes(s, s.contact_cols), "auto").solve(B)
             else:
                 import scipy.sparse.linalg as spla
 

@@ -169,11 +169,10 @@ def run_levels(
         steps = [st for _, _, st, _ in pending]
         p_rigids = [so.p_rigid for *_, so in pending]
         p_softs = [so.p_soft for *_, so in pending]
-        X = step_solver.recover_many(steps, p_rigids, p_softs, out=block[:, : len(pending)])
+        ys = [so.u_nu for *_, so in pending]
+        X = step_solver.recover_many(steps, p_rigids, p_softs, out=block[:, : len(pending)], ys=ys)
         # feasibility and complementarity over the scale of the normal displacements
-        y_refs = step_solver.displacement_scales(
-            steps, [so.u_nu for *_, so in pending], p_rigids, p_softs
-        )
+        y_refs = step_solver.displacement_scales(steps, ys, p_rigids, p_softs)
         fulls = kkt_residuals_block(sysm, steps, X, p_rigids, y_refs, opts.tol)
         rows = sink_rows([n_ for n_, *_ in pending]) if sink_rows is not None else None
         U = d.full_dofs_block(X, [st.t for _, _, st, _ in pending], out=rows)

@@ -40,7 +40,7 @@ from ..util.hashing import sha256_arrays
 from ..vem import Material
 from ..vem.assembly import Field
 from ..vem.space import ORDERS, P1Space, P1Space3D, P2Space, has_part, make_space, part_facets
-from .constraints import Constraints, Prescribed
+from .constraints import Constraints, Prescribed, describe_motions
 from .discrete import DataError
 from .timegrid import TimeGrid
 
@@ -142,17 +142,50 @@ class Problem(Generic[MeshT]):
             if not has_part(self.mesh, name):
                 kind = "faces" if self.dim == 3 else "edges"
                 raise MeshError(f"the mesh has no {name!r} boundary {kind}")
-        left = self.constraints.free_rigid_motions()
+        left = describe_motions(self.mesh, self.held_by_contact_check())
         if left:
             raise MeshError(
                 "the boundary conditions leave rigid motions free: "
                 + ", ".join(left)
-                + "; clamp a part or prescribe the displacement components that stop them"
+                + "; clamp a part or prescribe the displacement components that stop them "
+                "(contact holds only motions that move contact nodes along their normals)"
             )
         nodal = self.nodal  # validates g, mu, kappa, gap
         scale = float(max(np.abs(nodal["g"]).max(), 1e-300))
         for pc in self.parts:
             check_law(pc.p, scale=scale)
+
+    @cached_property
+    def rigid_basis(self) -> NDArray[np.float64]:
+        """The rigid motions that the constraints leave free and contact holds (load
+        control, docs/method.md section 1c): an orthonormal basis (r, 3) in 2D or (r, 6)
+        in 3D in the coordinates of :meth:`Constraints.rigid_motion_matrix`; empty when
+        the constraints hold the body."""
+        return self.constraints.free_rigid_basis()
+
+    def held_by_contact_check(self) -> NDArray[np.float64]:
+        """The free rigid motions that contact cannot hold (rows in the coordinates of
+        :meth:`Constraints.rigid_motion_matrix`): those that move no contact node along
+        its normal, the null space of ``N R`` within :attr:`rigid_basis`."""
+        basis = self.rigid_basis
+        if len(basis) == 0:
+            return basis
+        cb, con = self.contact, self.constraints
+        if cb.m == 0:
+            return basis
+        d = self.dim
+        # nu_a . r(x_a) of each free motion r at each contact node
+        NR = (
+            sum(
+                cb.normals[:, c, None]
+                * con.rigid_motion_matrix(cb.points, np.full(cb.m, c, dtype=np.int64))
+                for c in range(d)
+            )
+            @ basis.T
+        )
+        _, sv, Vt = np.linalg.svd(NR, full_matrices=True)
+        rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0)), 1e-300)))
+        return np.asarray(Vt[rank:] @ basis)
 
     @property
     def dim(self) -> int:

@@ -7,7 +7,8 @@ from .backends import (
     resolve_backend,
     schur_factorize,
 )
-from .newton import CondensedNewton, FullNewton, NewtonOptions
+from .full import FullNewton
+from .newton import CondensedNewton, NewtonOptions
 from .system import (
     ContactSystem,
     ConvergenceError,

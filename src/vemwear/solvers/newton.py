@@ -22,11 +22,15 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from .backends import factorize, schur_factorize
+from .backends import SchurFactorization, schur_factorize
 from .pieces import MIN_WIDTH, PiecePredictor, block_width
+from .rigid import (
+    anchored_schur,
+    newton_rigid,
+    rigid_modes,
+)
 from .system import (
     _TINY,
     RESIDUAL_NAMES,
@@ -35,7 +39,6 @@ from .system import (
     StepData,
     StepSolution,
     check_converged,
-    kkt_residuals,
     kkt_residuals_block,
 )
 from .threads import solver_threads
@@ -123,20 +126,33 @@ class CondensedNewton:
         self.system = system
         self.options = options or NewtonOptions()
         m = system.m
+        self.factor: SchurFactorization
+        if system.contact_dofs is None:
+            last = np.unique(np.concatenate([system.N.indices, system.Tau.indices]))
+        else:
+            cd = system.contact_dofs.ravel()
+            last = cd[cd >= 0]
+        #: the rigid motions that only contact holds (load control), or None
+        self.rigid = None if system.rigid is None else rigid_modes(system, last)
+        if self.rigid is not None:  # K without the anchors: the Schur block on ``last``
+            self.factor = anchored_schur(system, self.rigid, last, self.options.backend)
         if system.contact_dofs is None:  # a trace operator (k = 2): C_NN = N_c C N_c^T
-            cols = np.unique(np.concatenate([system.N.indices, system.Tau.indices]))
-            self.factor = schur_factorize(system.K, cols, system.dof_points, self.options.backend)
+            cols = last
+            if self.rigid is None:
+                self.factor = schur_factorize(
+                    system.K, cols, system.dof_points, self.options.backend
+                )
             Nc = system.N[:, cols].toarray()
             CN = self.factor.S_inv @ Nc.T
             self.C_NN = Nc @ CN
             self.C_NT = system.Tau[:, cols].toarray() @ CN
             self.C_NT = np.ascontiguousarray(self.C_NT.T)  # N C Tau^T
         else:
-            cd = system.contact_dofs.ravel()
             free = cd >= 0  # prescribed components of contact nodes are not unknowns
-            self.factor = schur_factorize(
-                system.K, cd[free], system.dof_points, self.options.backend
-            )
+            if self.rigid is None:
+                self.factor = schur_factorize(
+                    system.K, cd[free], system.dof_points, self.options.backend
+                )
             k = system.contact_dofs.shape[1]  # the dimension d
             if np.all(free):
                 C = self.factor.S_inv.reshape(m, k, m, k)  # block of K^{-1} on contact dofs
@@ -244,11 +260,14 @@ class CondensedNewton:
         p_rigids: list[NDArray],
         p_softs: list[NDArray],
         out: NDArray | None = None,
+        ys: list[NDArray] | None = None,
     ) -> NDArray:
         """Full displacements of several levels with one block solve, shape (nf, len(steps)).
 
         ``out``, a Fortran-ordered (nf, len(steps)) array, receives them instead of a
-        new array: a caller that recovers block after block reuses its memory.
+        new array: a caller that recovers block after block reuses its memory. Under
+        load control (:mod:`.rigid`) the levels' ``ys`` (``N u``) give the amplitudes
+        of the rigid motions, ``u = G (F - forces) + R a``.
         """
         s = self.system
         k = len(steps)
@@ -269,7 +288,15 @@ class CondensedNewton:
         # N and Tau act on the contact dofs only: (2m, k) products, not (n, k) ones
         NT, TT = s.force_operators
         rhs[s.contact_cols] -= NT @ P + TT @ Q
-        return self.factor.solve(rhs, out=out)
+        if self.rigid is None:
+            return self.factor.solve(rhs, out=out)
+        if ys is None:
+            raise ValueError("recover_many: the levels' y = N u are needed under load control")
+        D = np.column_stack([self.normal_displacement(st.F) for st in steps])
+        A = self.rigid.amplitudes(np.column_stack(ys), D, self.H @ np.vstack([P, Q]))
+        X = self.factor.solve(rhs, out=out)
+        X += self.rigid.R @ A
+        return X
 
     def predict(
         self,
@@ -289,7 +316,11 @@ class CondensedNewton:
     def predicts(self) -> bool:
         """Whether :meth:`predict` pays: a piecewise-linear law and at most 362 contact
         nodes (:data:`.pieces.MIN_WIDTH`)."""
-        return self.system.p.piecewise_linear and block_width(self.system.m) >= MIN_WIDTH
+        return (
+            self.rigid is None
+            and self.system.p.piecewise_linear
+            and block_width(self.system.m) >= MIN_WIDTH
+        )
 
     @property
     def predictor(self) -> PiecePredictor:
@@ -316,7 +347,7 @@ class CondensedNewton:
         u = None
         if recover:
             # certified as a recovered block is (run_levels): the solve's backward error
-            X = self.recover_many([step], [p_rigid], [p_soft])
+            X = self.recover_many([step], [p_rigid], [p_soft], ys=[y])
             scales = self.displacement_scales([step], [y], [p_rigid], [p_soft])
             res = kkt_residuals_block(s, [step], X, [p_rigid], scales)[0]
             u = X[:, 0]
@@ -342,6 +373,9 @@ class CondensedNewton:
         ``p_rigid = 0``, within the same ``max_iter``.
         """
         d = self.normal_displacement(step.F)
+        if self.rigid is not None:
+            start = None if guess is None else (np.array(guess.u_nu), np.array(guess.p_rigid))
+            return newton_rigid(self, step, d, start, 0)
         if guess is None:
             return self._newton(step, d, None, 0)[:5]
         start = (np.array(guess.u_nu, copy=True), np.array(guess.p_rigid, copy=True))
@@ -446,59 +480,4 @@ def _condensed_errors(y, p_rigid, R, g, inv_g, buf) -> tuple[float, float, float
     return equilibrium, max(0.0, -float(gap.min())), float(np.abs(ncp, out=ncp).max())
 
 
-class FullNewton:
-    """Semismooth Newton on all free dofs (the plain path): a new sparse LU per iteration."""
-
-    method = "newton-full"
-
-    def __init__(self, system: ContactSystem, options: NewtonOptions | None = None) -> None:
-        self.system = system
-        self.options = options or NewtonOptions()
-
-    def solve(
-        self, step: StepData, guess: StepSolution | None = None, recover: bool = True
-    ) -> StepSolution:
-        s, opt = self.system, self.options
-        if guess is not None and guess.u is not None:
-            u, p_rigid = np.array(guess.u, copy=True), np.array(guess.p_rigid, copy=True)
-        else:
-            u, p_rigid = np.zeros(s.n_free), np.zeros(s.m)
-        N, Tau, weights = s.N, s.Tau, s.weights
-        it = 0
-        while it < opt.max_iter:
-            it += 1
-            y = N @ u
-            p_soft, dp = s.p(y - step.w), s.p.derivative(y - step.w)
-            active = p_rigid + s.c_ncp * (y - s.g) > 0
-            J = (
-                s.K
-                + N.T @ sp.diags(weights * dp) @ N
-                + Tau.T @ sp.diags(weights * step.fric * dp) @ N
-            )
-            # residual without the rigid-layer term: p_rigid_new enters the system directly
-            r0 = s.K @ u - step.F + s.layer_forces(0.0, p_soft, step.fric)
-            if np.any(active):  # saddle point with the active constraints N_A u = g_A
-                NA = N[np.flatnonzero(active)]
-                M = sp.bmat([[J, NA.T @ sp.diags(weights[active])], [NA, None]], format="csc")
-                rhs = np.concatenate([-r0, s.g[active] - NA @ u])
-            else:
-                M, rhs = sp.csc_matrix(J), -r0
-            sol = factorize(M, opt.backend, symmetric=False, many_factorizations=True).solve(rhs)
-            du = sol[: s.n_free]
-            p_rigid_new = np.zeros(s.m)
-            p_rigid_new[active] = sol[s.n_free :]
-            u, p_rigid = u + du, p_rigid_new
-            if np.abs(du).max() <= 1e-14 * max(
-                np.abs(u).max(), float(np.abs(s.g).max())
-            ) and np.array_equal(active, p_rigid + s.c_ncp * (N @ u - s.g) > 0):
-                break
-        p_rigid = np.maximum(p_rigid, 0.0)
-        res = kkt_residuals(s, step, u, p_rigid)
-        check_converged(res, opt.tol, step, "semismooth Newton (full)", it)
-        y = N @ u
-        return StepSolution(
-            u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=it, residuals=res
-        )
-
-
-__all__ = ["CondensedNewton", "ConvergenceError", "FullNewton", "NewtonOptions"]
+__all__ = ["CondensedNewton", "ConvergenceError", "NewtonOptions"]

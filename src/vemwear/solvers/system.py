@@ -58,6 +58,11 @@ class ContactSystem:
         Rows ``d a + c``: component c of the displacement at node a from the free dofs,
         for spaces whose contact nodes are not dofs (k = 2: edge midpoints); then
         ``N = diag(nu_x) T_x + diag(nu_y) T_y`` and the same for ``Tau``.
+    rigid : (nf, r), optional
+        The rigid motions that only contact holds (load control, :mod:`.rigid`): K is
+        singular along them; None when the constraints hold the body.
+    rigid_names, contact_names : the rigid motions in words and the contact parts, for
+        messages
     """
 
     K: sp.csr_matrix
@@ -69,6 +74,9 @@ class ContactSystem:
     p: ComplianceLaw
     dof_points: NDArray[np.float64]
     trace: sp.csr_matrix | None = None
+    rigid: NDArray[np.float64] | None = None
+    rigid_names: tuple[str, ...] = ()
+    contact_names: tuple[str, ...] = ()
     N: sp.csr_matrix = field(init=False, repr=False)
     Tau: sp.csr_matrix = field(init=False, repr=False)
     c_ncp: NDArray[np.float64] = field(init=False, repr=False)

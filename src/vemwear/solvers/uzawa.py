@@ -47,6 +47,11 @@ class Uzawa:
     def __init__(self, system: ContactSystem, options: UzawaOptions | None = None) -> None:
         self.system = system
         self.options = options or UzawaOptions()
+        if system.rigid is not None:
+            raise ValueError(
+                "solver: uzawa needs a body held by its constraints; under load control (rigid "
+                "motions held by contact alone) use newton or newton-full"
+            )
         self.factor = factorize(system.K, self.options.backend)
         self.norm_C = self._compliance_norm()
         L = system.p.lipschitz if np.isfinite(system.p.lipschitz) else 1.0

@@ -1,0 +1,144 @@
+"""The full-space semismooth Newton method for the step problem (the plain path).
+
+Newton on all free dofs with a fresh sparse factorization of the Jacobian at every
+iteration; the complementarity conditions as in :mod:`.newton`. Under load control
+(:mod:`.rigid`) its unknowns are u on the kept dofs and the rigid amplitudes.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from .backends import factorize
+from .newton import NewtonOptions
+from .rigid import anchored_factor, bordered_jacobian, liftoff_error, rigid_modes, touching
+from .system import (
+    _TINY,
+    ContactSystem,
+    ConvergenceError,
+    StepData,
+    StepSolution,
+    check_converged,
+    kkt_residuals,
+)
+
+
+class FullNewton:
+    """Semismooth Newton on all free dofs (the plain path): a new sparse LU per iteration."""
+
+    method = "newton-full"
+
+    def __init__(self, system: ContactSystem, options: NewtonOptions | None = None) -> None:
+        self.system = system
+        self.options = options or NewtonOptions()
+        #: the rigid motions that only contact holds (load control), or None
+        self.rigid = None if system.rigid is None else rigid_modes(system, system.contact_cols)
+        self._G: Any = None  # K without the anchors, factorized at the first use
+
+    def solve(
+        self, step: StepData, guess: StepSolution | None = None, recover: bool = True
+    ) -> StepSolution:
+        s, opt, rig = self.system, self.options, self.rigid
+        if guess is not None and guess.u is not None:
+            u, p_rigid = np.array(guess.u, copy=True), np.array(guess.p_rigid, copy=True)
+        if rig is not None and rig.negligible(step.F):
+            return self._touching(step)
+        if guess is not None and guess.u is not None:
+            pass
+        elif rig is not None:  # the rigid motion that puts the body halfway into the layer
+            room = s.g > step.w
+            y0 = np.where(room, step.w + 0.5 * (s.g - step.w), s.g)
+            u, p_rigid = rig.R @ (rig.pinv_NR @ y0), np.zeros(s.m)
+        else:
+            u, p_rigid = np.zeros(s.n_free), np.zeros(s.m)
+        N, Tau, weights = s.N, s.Tau, s.weights
+        it = 0
+        while it < opt.max_iter:
+            it += 1
+            y = N @ u
+            p_soft, dp = s.p(y - step.w), s.p.derivative(y - step.w)
+            active = p_rigid + s.c_ncp * (y - s.g) > 0
+            J = (
+                s.K
+                + N.T @ sp.diags(weights * dp) @ N
+                + Tau.T @ sp.diags(weights * step.fric * dp) @ N
+            )
+            # residual without the rigid-layer term: p_rigid_new enters the system directly
+            r0 = s.K @ u - step.F + s.layer_forces(0.0, p_soft, step.fric)
+            # under load control the unknowns are u on the kept dofs and the rigid
+            # amplitudes a (u = P u_keep + R a, :mod:`.rigid`)
+            Jb = J if rig is None else bordered_jacobian(J, rig)[0]
+            if np.any(active):  # saddle point with the active constraints N_A u = g_A
+                NA = N[np.flatnonzero(active)]
+                NAb = NA if rig is None else bordered_jacobian(NA, rig)[0]
+                M = sp.bmat([[Jb, NA.T @ sp.diags(weights[active])], [NAb, None]], format="csc")
+                rhs = np.concatenate([-r0, s.g[active] - NA @ u])
+            else:
+                M, rhs = sp.csc_matrix(Jb), -r0
+            try:
+                lu = factorize(M, opt.backend, symmetric=False, many_factorizations=True)
+            except ConvergenceError:
+                if rig is None or np.any(active) or np.any(dp):
+                    raise
+                x = np.concatenate([weights * (p_soft + p_rigid), weights * step.fric * p_soft])
+                raise liftoff_error(
+                    s, rig, step, x, rig.load(step.F), "semismooth Newton (full)"
+                ) from None
+            sol = lu.solve(rhs)
+            if rig is None:
+                du = sol[: s.n_free]
+            else:
+                nk = len(rig.keep)
+                du = rig.R @ sol[nk : s.n_free]
+                du[rig.keep] += sol[:nk]
+            p_rigid_new = np.zeros(s.m)
+            p_rigid_new[active] = sol[s.n_free :]
+            u, p_rigid = u + du, p_rigid_new
+            if np.abs(du).max() <= 1e-14 * max(
+                np.abs(u).max(), float(np.abs(s.g).max())
+            ) and np.array_equal(active, p_rigid + s.c_ncp * (N @ u - s.g) > 0):
+                break
+        p_rigid = np.maximum(p_rigid, 0.0)
+        res = kkt_residuals(s, step, u, p_rigid)
+        if rig is not None and max(res.values()) > opt.tol:
+            p_soft = s.p(N @ u - step.w)
+            if not (np.any(p_soft) or np.any(p_rigid)):
+                x = np.concatenate([weights * p_soft, weights * step.fric * p_soft])
+                raise liftoff_error(s, rig, step, x, rig.load(step.F), "semismooth Newton (full)")
+        check_converged(res, opt.tol, step, "semismooth Newton (full)", it)
+        y = N @ u
+        return StepSolution(
+            u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=it, residuals=res
+        )
+
+    def _touching(self, step: StepData) -> StepSolution:
+        """Under a load with no component along the held rigid motions: no contact
+        force, the body touching the worn layer (:func:`.rigid.touching`)."""
+        s, rig = self.system, self.rigid
+        assert rig is not None
+        if self._G is None:
+            self._G = anchored_factor(s, rig, self.options.backend)
+        u = self._G.solve(step.F)
+        y, *_ = touching(s, rig, step, s.N @ u)
+        u = u + rig.R @ (rig.pinv_NR @ (y - s.N @ u))
+        p_rigid = np.zeros(s.m)
+        res = kkt_residuals(s, step, u, p_rigid)
+        # the load is zero along R only to rounding: its residual, R (R^T F) / |R|^2, is
+        # measured as a backward error on the scale of the displacements (as the
+        # recovered u of the condensed solver is, kkt_residuals_block)
+        x_ref = max(float(np.abs(u).max(initial=0)), float(np.abs(s.g).max()))
+        r = s.K @ u - step.F
+        res["equilibrium"] = float(np.abs(r).max()) / max(
+            float(np.abs(step.F).max()), s.K_norm * x_ref, _TINY
+        )
+        check_converged(res, self.options.tol, step, "semismooth Newton (full)", 0)
+        y = s.N @ u
+        return StepSolution(
+            u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=0, residuals=res
+        )
+
+
+__all__ = ["FullNewton"]
