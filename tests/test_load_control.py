@@ -8,6 +8,7 @@ load, and a load that pulls the body off the foundation stops the run naming the
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -223,3 +224,13 @@ vtk = false
     t = np.arange(5) / 8
     expected = np.concatenate([[0.0], np.cumsum(0.5 * 0.06 * np.cos(np.pi * t[:4]) / 8)])
     assert np.abs(wear[:5] - expected[:, None]).max() < 1e-12
+
+
+def test_signorini_pad_rests_on_the_rigid_layer() -> None:
+    """No soft layer (p = 0, a thin g): the rigid layer alone carries P / A; Newton
+    starts with every node on it (docs/method.md section 1c)."""
+    pr = dataclasses.replace(pad(), p=LinearCompliance(0.0), g=1e-3, kappa=0.0)
+    for method in ("newton", "newton-full"):
+        res = simulate(pr, method)
+        assert np.abs(res.p_rigid - P / W).max() <= 1e-10 * P
+        assert np.all(res.p_soft == 0) and balance(res) <= 1e-12

@@ -14,7 +14,14 @@ import scipy.sparse as sp
 
 from .backends import factorize
 from .newton import NewtonOptions
-from .rigid import anchored_factor, bordered_jacobian, liftoff_error, rigid_modes, touching
+from .rigid import (
+    anchored_factor,
+    bordered_jacobian,
+    cold_start,
+    liftoff_error,
+    rigid_modes,
+    touching,
+)
 from .system import (
     _TINY,
     ContactSystem,
@@ -48,10 +55,9 @@ class FullNewton:
             return self._touching(step)
         if guess is not None and guess.u is not None:
             pass
-        elif rig is not None:  # the rigid motion that puts the body halfway into the layer
-            room = s.g > step.w
-            y0 = np.where(room, step.w + 0.5 * (s.g - step.w), s.g)
-            u, p_rigid = rig.R @ (rig.pinv_NR @ y0), np.zeros(s.m)
+        elif rig is not None:  # the rigid motion to the condensed Newton's cold start
+            y0, p_rigid = cold_start(s, step.w)
+            u = rig.R @ (rig.pinv_NR @ y0)
         else:
             u, p_rigid = np.zeros(s.n_free), np.zeros(s.m)
         N, Tau, weights = s.N, s.Tau, s.weights

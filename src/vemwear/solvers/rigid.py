@@ -94,10 +94,47 @@ class RigidModes:
     pinv_NR: NDArray[np.float64]
     names: tuple[str, ...]
     force_scale: NDArray[np.float64]
+    _load: tuple[Any, NDArray[np.float64], bool] | None = None
+    _bordered: tuple[bytes, Any, float] | None = None
 
     def load(self, F: NDArray[np.float64]) -> NDArray[np.float64]:
         """``R^T F``: the load along the rigid motions."""
         return self.R.T @ F
+
+    def load_of(self, F: NDArray[np.float64]) -> tuple[NDArray[np.float64], bool]:
+        """:meth:`load` and :meth:`negligible` of F, kept for the same array object (a
+        constant load is one)."""
+        if self._load is None or self._load[0] is not F:
+            self._load = (F, self.load(F), self.negligible(F))
+        return self._load[1], self._load[2]
+
+    def bordered(
+        self, solver: Any, active: NDArray, dp: NDArray, fric: NDArray, wf: NDArray
+    ) -> tuple[Any, float]:
+        """The LU factors of the bordered reduced matrix of a piece (None if singular)
+        and the scale of its force rows, kept while the piece and friction stay."""
+        key = active.tobytes() + dp.tobytes() + fric.tobytes()
+        if self._bordered is not None and self._bordered[0] == key:
+            return self._bordered[1], self._bordered[2]
+        m, r = len(active), self.R.shape[1]
+        w = solver.system.weights
+        inactive = np.flatnonzero(~active)
+        B = np.zeros((m + r, m + r))
+        Mat = B[:m, :m]
+        Mat[...] = (solver.A_norm + solver.T_fric * fric[None, :]) * dp[None, :]
+        Mat[:, active] = solver.A_norm[:, active]
+        Mat[inactive, inactive] += 1.0
+        B[:m, m:] = -self.NR
+        L = (self.NR.T * w + self.TR.T * wf) * dp
+        L[:, active] = self.NR.T[:, active] * w[active]
+        # the force rows on the scale of the displacement rows, for the pivoting
+        sR = 1.0 / max(float(np.abs(L).max()), _TINY)
+        B[m:, :m] = sR * L
+        lu = sla.lu_factor(B, check_finite=False)
+        if not np.all(np.abs(np.diag(lu[0])) > 1e-14 * max(float(np.abs(B).max()), _TINY)):
+            lu = None  # singular: no node holds a rigid motion
+        self._bordered = (key, lu, sR)
+        return lu, sR
 
     def negligible(self, F: NDArray[np.float64]) -> bool:
         """Whether the load has no component along the rigid motions: each within
@@ -189,6 +226,19 @@ def bordered_jacobian(
     return sp.hstack([J.tocsc()[:, rigid.keep], sp.csc_matrix(JR)], format="csc"), JR
 
 
+def cold_start(system: ContactSystem, wear: NDArray) -> tuple[NDArray, NDArray]:
+    """Newton's start under load control, (y, p_rigid): every contact node halfway into
+    the soft layer where the layer is stiff there; on the rigid layer, active with a
+    small pressure, where it is worn through or has no stiffness (p = 0: Signorini
+    contact). Either way the first step's matrix holds the body."""
+    g = system.g
+    y = wear + 0.5 * (g - wear)
+    soft = (g > wear) & (system.p.derivative(y - wear) > 0)
+    y = np.where(soft, y, g)
+    p_rigid = np.where(soft, 0.0, system.c_ncp * 1e-3 * float(np.abs(g).max()))
+    return y, p_rigid
+
+
 def newton_rigid(solver: Any, step: StepData, d: NDArray, start: tuple | None, it: int):
     """The condensed semismooth Newton iteration with the rigid amplitudes ``a``
     (:class:`~vemwear.solvers.newton.CondensedNewton` under load control): the reduced
@@ -196,26 +246,18 @@ def newton_rigid(solver: Any, step: StepData, d: NDArray, start: tuple | None, i
 
     Returns y, p_rigid, p_soft, the iteration count and the three residuals (the
     equilibrium one the larger of the condensed equation's, over max g, and the force
-    balance's, :meth:`RigidModes.balance`). From the cold start the nodes start halfway
-    into the soft layer (where it is thinner than the wear, on the rigid layer), so
-    that the layer's stiffness holds the body in the first step.
+    balance's, :meth:`RigidModes.balance`). The stopping rule is the condensed
+    Newton's (docs/method.md section 5); the start, :func:`cold_start` without a guess.
     """
-    from .system import condensed_residuals
-
     s, opt, rig = solver.system, solver.options, solver.rigid
     g, c_ncp, wear, fric, law, w = s.g, s.c_ncp, step.w, step.fric, s.p, s.weights
-    m, r = s.m, rig.R.shape[1]
-    wf = w * fric
-    H, A_norm, T_fric = solver.H, solver.A_norm, solver.T_fric
-    f_R = rig.load(step.F)
-    if rig.negligible(step.F):
+    H = solver.H
+    f_R, negligible = rig.load_of(step.F)
+    if negligible:
         return touching(s, rig, step, d)
-    if start is None:
-        room = g > wear
-        y = np.where(room, wear + 0.5 * (g - wear), g)
-        p_rigid = np.where(room, 0.0, c_ncp * 1e-3 * float(np.abs(g).max()))
-    else:
-        y, p_rigid = start
+    y, p_rigid = cold_start(s, wear) if start is None else start
+    wf = w * fric
+    inv_g = solver.inv_g_ref
 
     def layer(y: NDArray, p_rigid: NDArray) -> tuple[NDArray, NDArray]:
         p_soft = law(y - wear)
@@ -229,53 +271,51 @@ def newton_rigid(solver: Any, step: StepData, d: NDArray, start: tuple | None, i
     while True:
         p_soft, x = layer(y, p_rigid)
         R1 = H @ x + y - d - rig.NR @ a
-        res = condensed_residuals(s, y, p_rigid, R1)
         R2, eq2 = rig.balance(x, f_R)
-        errors = (max(res["equilibrium"], eq2), res["feasibility"], res["complementarity"])
-        if max(errors) <= stop or it == opt.max_iter:
+        errors = _errors(y, p_rigid, R1, g, inv_g, eq2)
+        done = max(errors) <= stop or it == opt.max_iter
+        if not done:
+            it += 1
+            active = p_rigid + c_ncp * (y - g) > 0.0
+            dp = law.derivative(y - wear)
+            piece = active.tobytes() + dp.tobytes()
+            same = same + 1 if piece == last else 0
+            last = piece
+            if (same >= 2 and max(errors) <= opt.tol) or same >= 4:
+                done, it = True, it - 1
+        if done:
             if max(errors) > opt.tol and not (np.any(p_soft) or np.any(p_rigid)):
                 raise liftoff_error(s, rig, step, x, f_R, method)
             return y, p_rigid, p_soft, it, errors
-        it += 1
-        active = p_rigid + c_ncp * (y - g) > 0.0
-        dp = law.derivative(y - wear)
-        piece = active.tobytes() + dp.tobytes()
-        if piece == last:
-            same += 1
-            if (same >= 2 and max(errors) <= opt.tol) or same >= 4:
-                if max(errors) > opt.tol and not (np.any(p_soft) or np.any(p_rigid)):
-                    raise liftoff_error(s, rig, step, x, f_R, method)
-                return y, p_rigid, p_soft, it - 1, errors
-        else:
-            same = 0
-        last = piece
         if not np.any(active) and not np.any(dp):
             raise liftoff_error(s, rig, step, x, f_R, method)
-        inactive = np.flatnonzero(~active)
-        B = np.zeros((m + r, m + r))
-        Mat = B[:m, :m]
-        Mat[...] = (A_norm + T_fric * fric[None, :]) * dp[None, :]
-        Mat[:, active] = A_norm[:, active]
-        Mat[inactive, inactive] += 1.0
-        B[:m, m:] = -rig.NR
-        L = (rig.NR.T * w + rig.TR.T * wf) * dp
-        L[:, active] = rig.NR.T[:, active] * w[active]
-        # the force rows on the scale of the displacement rows, for the pivoting
-        sR = 1.0 / max(float(np.abs(L).max()), _TINY)
-        B[m:, :m] = sR * L
+        lu, sR = rig.bordered(solver, active, dp, fric, wf)
         dy_A = np.where(active, g - y, 0.0)
         dp_I = np.where(active, 0.0, p_rigid)
         t = dp * dy_A
         xp = np.concatenate([w * (t - dp_I), wf * t])
         rhs = np.concatenate([-R1 - dy_A - H @ xp, -sR * (R2 + rig.H_R @ xp)])
-        try:
-            sol = sla.solve(B, rhs, check_finite=False)
-        except np.linalg.LinAlgError:
-            raise liftoff_error(s, rig, step, x, f_R, method) from None
-        z, da = sol[:m], sol[m:]
-        y = np.where(active, g, y + z)
-        p_rigid = np.where(active, p_rigid + z, 0.0)
-        a = a + da
+        if lu is None:
+            raise liftoff_error(s, rig, step, x, f_R, method)
+        sol = sla.lu_solve(lu, rhs, check_finite=False)
+        m = s.m
+        y = np.where(active, g, y + sol[:m])
+        p_rigid = np.where(active, p_rigid + sol[:m], 0.0)
+        a = a + sol[m:]
+
+
+def _errors(
+    y: NDArray, p_rigid: NDArray, R1: NDArray, g: NDArray, inv_g: float, eq2: float
+) -> tuple[float, float, float]:
+    """The three condensed residuals (:func:`~vemwear.solvers.system.condensed_residuals`)
+    with the force balance's ``eq2`` in the equilibrium one."""
+    equilibrium = max(float(np.abs(R1).max()) * inv_g, eq2)
+    gap = (g - y) * inv_g
+    feasibility = max(0.0, -float(gap.min()))
+    p_ref = float(np.abs(p_rigid).max())
+    if p_ref == 0.0:
+        return equilibrium, feasibility, feasibility
+    return equilibrium, feasibility, float(np.abs(np.minimum(p_rigid / p_ref, gap)).max())
 
 
 def touching(system: ContactSystem, rig: RigidModes, step: StepData, d: NDArray):
