@@ -293,6 +293,7 @@ def _problem(
             order=c.vem.order,
             clamped=parts.clamped,
             displacement=tuple(parts.displacement),
+            rigid=tuple(parts.rigid),
             contacts=contacts,
             **top,
         )

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..contact import ContactPart, LinearCompliance, TableCompliance
-from ..simulate import Prescribed
+from ..simulate import Prescribed, RigidPart
 from . import schema as s
 from .errors import ConfigError, at
 from .expr import Expression
@@ -76,6 +76,7 @@ class Roles:
     tractions: dict[str, tuple[Any, Any]] = field(default_factory=dict)
     displacement: list[Prescribed] = field(default_factory=list)
     contacts: list[tuple[str, s.Contact, dict[str, Any], str]] = field(default_factory=list)
+    rigid: list[RigidPart] = field(default_factory=list)
 
     def add(self, src: str, name: str, selector: Any, path: str) -> None:
         if name in self.selectors:
@@ -89,6 +90,42 @@ class Roles:
 
 def _component(v: Any) -> Any:
     return ComponentExpression(v) if isinstance(v, Expression) else v
+
+
+class TimeExpression:
+    """A rigid part's force or translation component as an expression in ``t``."""
+
+    def __init__(self, expr: Expression) -> None:
+        self.expr, self.__name__ = expr, expr.text
+
+    def __call__(self, t: float) -> float:
+        return float(np.asarray(self.expr(t=np.array([float(t)]))).ravel()[0])
+
+
+def _time(v: Any) -> Any:
+    return TimeExpression(v) if isinstance(v, Expression) else v
+
+
+def _rigid_part(src: str, name: str, path: str, rp: s.RigidPartTable) -> RigidPart:
+    """The library's :class:`RigidPart` of a ``[[boundary.rigid]]`` table."""
+    if rp.rotation == "free":
+        raise ConfigError(
+            f"{src}: {path}: rotation = 'free' is not available: a rigid part translates "
+            "only (rotation = 'fixed')"
+        )
+    keys = (rp.fx, rp.fy, rp.fz)
+    if rp.force is not None and any(k is not None for k in keys):
+        raise ConfigError(f"{src}: {path}: give the force as force = [...] or as fx, fy, fz")
+    force = list(rp.force) if rp.force is not None else list(keys)
+    force += [None] * (3 - len(force))
+    trans = [rp.ux, rp.uy, rp.uz]
+    for c in range(3):
+        if force[c] is not None and trans[c] is not None:
+            raise ConfigError(
+                f"{src}: {path}: component {'xyz'[c]} has both a force and a prescribed "
+                f"translation u{'xyz'[c]}; give one"
+            )
+    return RigidPart(name, tuple(_time(f) for f in force), tuple(_time(u) for u in trans))
 
 
 def roles(src: str, c: s.ConfigFile, raw: Mapping[str, Any]) -> Roles:
@@ -128,6 +165,11 @@ def roles(src: str, c: s.ConfigFile, raw: Mapping[str, Any]) -> Roles:
             r.displacement.append(
                 Prescribed(name, _component(dp.ux), _component(dp.uy), _component(dp.uz))
             )
+        for i, rp in enumerate(b.rigid or []):
+            name = rp.name or f"rigid{i + 1}"
+            path = f"[[boundary.rigid]] {i + 1}"
+            r.add(src, name, rp.on, path)
+            r.rigid.append(_rigid_part(src, name, path, rp))
     for i, (ct, rt) in enumerate(zip(tables, raw_tables, strict=True)):
         path = f"[[contact]] {i + 1}" if several else "[contact]"
         name = ct.name or (f"contact{i + 1}" if several else "contact")

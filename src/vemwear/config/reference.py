@@ -112,6 +112,7 @@ def reference_tables() -> dict[str, str]:
         "boundary.displacement": _table(head, _rows(s.DisplacementPart)),
         "time.cycle_jump": _table(head, _rows(s.CycleJumpTable)),
         "boundary.traction": _table(head, _rows(s.TractionPart)),
+        "boundary.rigid": _table(head, _rows(s.RigidPartTable)),
     }
     for name in ("boundary", "material", "vem", "loads", "contact", "solver", "output"):
         tables[name] = _table(head, _rows(getattr(s, name.title())))

@@ -382,6 +382,38 @@ class DisplacementPart(Section):
     uz: DispComponent | None = Field(None, description="prescribed u_z (3D meshes)")
 
 
+TimeComponent: TypeAlias = by_kind(  # type: ignore[valid-type]
+    "a number or an expression string in t",
+    number=float,
+    string=expression("t"),
+)
+
+
+class RigidPartTable(Section):
+    """A part that moves as one rigid body (the holder of a pin or ball): each component
+    of its translation is prescribed (ux, uy, uz) or loaded by a force resultant (force,
+    or fx, fy, fz; zero when omitted)."""
+
+    name: str | None = Field(None, description="name of the part (default: rigid1, rigid2, ...)")
+    on: Selector = Field(title="selector", description="where")
+    force: list[TimeComponent] | None = Field(  # type: ignore[valid-type]
+        None,
+        min_length=2,
+        max_length=3,
+        description="resultant [fx, fy] (3D: [fx, fy, fz]) on the part: numbers or expressions "
+        "in t",
+    )
+    fx: TimeComponent | None = Field(None, description="x component of the resultant")
+    fy: TimeComponent | None = Field(None, description="y component of the resultant")
+    fz: TimeComponent | None = Field(None, description="z component of the resultant (3D)")
+    ux: TimeComponent | None = Field(None, description="prescribed x translation of the part")
+    uy: TimeComponent | None = Field(None, description="prescribed y translation of the part")
+    uz: TimeComponent | None = Field(None, description="prescribed z translation (3D)")
+    rotation: Literal["fixed", "free"] = Field(
+        "fixed", description="'fixed': the part translates only"
+    )
+
+
 class TractionPart(Section):
     """A traction part with its own load."""
 
@@ -431,6 +463,12 @@ class Boundary(Section):
         title="tables",
         description="[[boundary.displacement]] tables { name, on, ux, uy, uz }: prescribed "
         "displacement components",
+    )
+    rigid: list[RigidPartTable] | None = Field(
+        None,
+        title="tables",
+        description="[[boundary.rigid]] tables { name, on, force, ux, uy, uz, rotation }: parts "
+        "that move as one rigid body, loaded by a resultant or with a prescribed translation",
     )
 
 

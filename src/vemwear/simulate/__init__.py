@@ -5,6 +5,7 @@ from .constraints import Prescribed
 from .discrete import Discretization
 from .loop import Result, SolverOptions, simulate
 from .problem import Problem
+from .rigidparts import RigidPart
 from .timegrid import TimeGrid
 
 __all__ = [
@@ -13,6 +14,7 @@ __all__ = [
     "Prescribed",
     "Problem",
     "Result",
+    "RigidPart",
     "SolverOptions",
     "TimeGrid",
     "simulate",

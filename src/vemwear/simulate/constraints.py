@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..mesh.polyhedra import Mesh3D
 from ..mesh.polymesh import Mesh
 from ..vem.space import P1Space, Space, has_part, make_space, part_facets
+from .rigidparts import RigidPart, Ties
 
 __all__ = ["Component", "Constraints", "Prescribed"]
 
@@ -95,6 +96,7 @@ class Constraints:
         clamped: Sequence[str],
         prescribed: Sequence[Prescribed],
         space: Space | None = None,
+        rigid: Sequence[RigidPart] = (),
     ) -> None:
         if space is None:
             space = make_space(mesh) if isinstance(mesh, Mesh3D) else P1Space(mesh)
@@ -108,35 +110,72 @@ class Constraints:
             if d == 2 and p.uz is not None:
                 raise ValueError(f"displacement on {p.part!r}: uz is for 3D meshes only")
         clamped = tuple(c for c in clamped if has_part(mesh, c))
-        #: the constraining parts: the clamped ones, then the prescribed ones
-        self.parts = (*clamped, *(p.part for p in prescribed))
+        #: the constraining parts: the clamped ones, the prescribed ones, the rigid ones
+        self.parts = (*clamped, *(p.part for p in prescribed), *(r.part for r in rigid))
         self.n_clamped = len(clamped)
         owner = -np.ones(n, dtype=np.int64)  # -1 free, else the index in self.parts
         for i, name in enumerate(clamped):
             for dd in sp_.component_dofs(part_facets(mesh, name)):
                 owner[dd[owner[dd] < 0]] = i
+        # rigid parts (section 1d): their dofs are tied to one master per component; they
+        # win over prescribed parts at shared vertices, and may not touch a clamped one
+        rigid_dofs = [sp_.component_dofs(part_facets(mesh, r.part)) for r in rigid]
+        for r, comp in zip(rigid, rigid_dofs, strict=True):
+            hit = np.concatenate(comp)[owner[np.concatenate(comp)] >= 0]
+            if len(hit):
+                raise ValueError(
+                    f"the rigid part {r.part!r} touches the clamped part "
+                    f"{self.parts[owner[hit[0]]]!r} (dof {int(hit[0])}, at "
+                    f"{sp_.dof_points[hit[0]].tolist()}): a clamped vertex cannot move with "
+                    "the rigid part"
+                )
+        tied = np.zeros(n, dtype=bool)
+        for comp in rigid_dofs:
+            for dd in comp:
+                tied[dd] = True
         for i, pr in enumerate(prescribed):
             comp = sp_.component_dofs(part_facets(mesh, pr.part))
             for dd, spec in zip(comp, comps[i], strict=True):
                 if spec is not None:
+                    dd = dd[~tied[dd]]
                     owner[dd[owner[dd] < 0]] = self.n_clamped + i
+        #: the ties of the rigid parts (None without rigid parts)
+        self.ties = Ties(tuple(rigid), [list(c[:d]) for c in rigid_dofs], n) if rigid else None
+        self.rigid = tuple(rigid)
+        if self.ties is not None:
+            first = self.n_clamped + len(prescribed)
+            for j, r in enumerate(rigid):
+                for c in range(d):
+                    if r.component(c)[1] is not None:
+                        owner[self.ties.masters[j, c]] = first + j
+            tied[self.ties.masters.ravel()] = False  # masters are dofs; slaves are not
+        #: dofs tied to a rigid part's master (neither free nor constrained)
+        self.slaves = np.flatnonzero(tied)
         self.mesh = mesh
         self.prescribed = tuple(prescribed)
         self.dofs = np.flatnonzero(owner >= 0)
         self.owner = owner[self.dofs]
-        self.free = np.flatnonzero(owner < 0)
+        self.free = np.flatnonzero((owner < 0) & ~tied)
         self.mask = owner >= 0
+        self._tied = tied
         self._components = comps
-        self.time_dependent = any(callable(c) for cs in comps for c in cs)
+        self.time_dependent = any(callable(c) for cs in comps for c in cs) or bool(
+            self.ties is not None and self.ties.time_dependent
+        )
         self.zero = all(
             not callable(c) and (c is None or float(c) == 0.0) for cs in comps for c in cs
+        ) and all(
+            not callable(u) and (u is None or float(u) == 0.0) for r in rigid for u in r.translation
         )
 
     @property
     def fully_fixed_vertices(self) -> NDArray[np.bool_]:
         """Vertices with all components constrained (they are no contact nodes)."""
         d = self.dim
-        return np.asarray(self.mask[: d * self.mesh.n_points].reshape(-1, d).all(axis=1))
+        fixed = self.mask | self._tied
+        if self.ties is not None:  # the masters move with their rigid part
+            fixed[self.ties.masters.ravel()] = True
+        return np.asarray(fixed[: d * self.mesh.n_points].reshape(-1, d).all(axis=1))
 
     def values(self, t: float) -> NDArray[np.float64]:
         """The prescribed values at the constrained dofs (``self.dofs``) at time ``t``."""
@@ -158,6 +197,13 @@ class Constraints:
                     out[sel] = val
                 else:
                     out[sel] = float(spec)
+        first = self.n_clamped + len(self.prescribed)
+        for j, r in enumerate(self.rigid):
+            for c in range(self.dim):
+                u = r.component(c)[1]
+                sel = (self.owner == first + j) & (self.dofs % self.dim == c)
+                if u is not None and np.any(sel):
+                    out[sel] = float(u(t)) if callable(u) else float(u)
         return out
 
     def rigid_motion_matrix(self, X: NDArray[np.float64], c: NDArray[np.int64]) -> NDArray:
@@ -189,9 +235,19 @@ class Constraints:
         linear, so its dof, a vertex value or a mean over an edge or a cell, is its value
         at the dof's point)."""
         n_rigid = 6 if self.dim == 3 else 3
-        if len(self.dofs) == 0:
+        if len(self.dofs) == 0 and len(self.slaves) == 0:
             return np.eye(n_rigid)
-        A = self.rigid_motion_matrix(self.space.dof_points[self.dofs], self.dofs % self.dim)
+        pts, d = self.space.dof_points, self.dim
+        A = self.rigid_motion_matrix(pts[self.dofs], self.dofs % d)
+        if self.ties is not None:  # a tie u_s = u_master holds what moves s and its master apart
+            s, m = self.slaves, self.ties.master[self.slaves]
+            A = np.vstack(
+                [
+                    A,
+                    self.rigid_motion_matrix(pts[s], s % d)
+                    - self.rigid_motion_matrix(pts[m], m % d),
+                ]
+            )
         _, sv, Vt = np.linalg.svd(A, full_matrices=True)
         rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0)), 1e-300)))
         return np.asarray(Vt[rank:])

@@ -88,6 +88,8 @@ class Discretization:
         self.space = space = problem.space
         with np.errstate(all="ignore"):
             self.K_full = space.stiffness(problem.material, problem.stabilization)
+            if con.ties is not None:  # Q^T K Q: the rigid parts' ties (docs/method.md 1d)
+                self.K_full = con.ties.tie(self.K_full)
         if not np.all(np.isfinite(self.K_full.data)):
             mat = problem.material
             raise DataError(
@@ -301,7 +303,11 @@ class Discretization:
         """``(part, kind)`` of the rows of :meth:`resultants`: every contact part
         (``"contact"``), then every clamped and prescribed part (``"reaction"``)."""
         cb, con = self.contact, self.constraints
-        return (*((n, "contact") for n in cb.part_names), *((n, "reaction") for n in con.parts))
+        kinds = ["reaction"] * (len(con.parts) - len(con.rigid)) + ["rigid"] * len(con.rigid)
+        return (
+            *((n, "contact") for n in cb.part_names),
+            *zip(con.parts, kinds, strict=True),
+        )
 
     def resultants(self, step: StepData, solution: StepSolution, solver: Any) -> NDArray:
         """(P, d) force resultants on the body at a level (rows :attr:`force_parts`):
@@ -333,7 +339,12 @@ class Discretization:
             f = op.A @ X[j]
             if op.ZT is not None and op.ET is not None:
                 f += self._static_reactions(op, op.ZT, op.ET, step)
-            out.append(f.reshape(-1, self.dim))
+            f = f.reshape(-1, self.dim)
+            if self.constraints.ties is not None:  # the force on a loaded component
+                f[len(f) - len(self.constraints.rigid) :] += self.constraints.ties.forces(
+                    step.t, self.dim
+                )
+            out.append(f)
         return out
 
     def _static_reactions(
@@ -407,6 +418,9 @@ class Discretization:
             return self._F_all
         with np.errstate(all="ignore"):
             F = self.problem.external_load(t)
+        ties = self.constraints.ties
+        if ties is not None:  # Q^T f_h and the rigid parts' resultants on their masters
+            F = ties.load(F, t)
         if self.constant_load:
             self._F_all = F
         return F
@@ -451,6 +465,8 @@ class Discretization:
         else:
             for j, t in enumerate(times):
                 U[j, con.dofs] = con.values(cast(float, t))
+        if con.ties is not None:  # u = Q u_hat: the tied dofs move with their masters
+            U[:, con.slaves] = U[:, con.ties.master[con.slaves]]
         return U
 
     def full_displacement(

@@ -42,6 +42,7 @@ from ..vem.assembly import Field
 from ..vem.space import ORDERS, P1Space, P1Space3D, P2Space, has_part, make_space, part_facets
 from .constraints import Constraints, Prescribed, describe_motions
 from .discrete import DataError
+from .rigidparts import RigidPart
 from .timegrid import TimeGrid
 
 if TYPE_CHECKING:
@@ -96,6 +97,9 @@ class Problem(Generic[MeshT]):
     order : int
         The order k of the virtual element space (:mod:`vemwear.vem.space`): 1 (the
         paper's examples) or 2 (docs/method.md, section 9).
+    rigid : tuple of RigidPart
+        Parts that move as one rigid body, loaded by a force resultant or with a
+        prescribed translation (the holder of a pin or ball, docs/method.md section 1d).
 
     ``f2`` may also be a mapping ``{part: traction}`` for several traction parts.
     Every boundary edge belongs to one part; parts that are none of the above are
@@ -118,6 +122,7 @@ class Problem(Generic[MeshT]):
     displacement: tuple[Prescribed, ...] = ()
     contacts: tuple[ContactPart, ...] = ()
     order: int = 1
+    rigid: tuple[RigidPart, ...] = ()
 
     def __post_init__(self) -> None:
         if self.order not in ORDERS:
@@ -127,6 +132,7 @@ class Problem(Generic[MeshT]):
         object.__setattr__(self, "clamped", tuple(self.clamped))
         object.__setattr__(self, "displacement", tuple(self.displacement))
         object.__setattr__(self, "contacts", tuple(self.contacts))
+        object.__setattr__(self, "rigid", tuple(self.rigid))
         if isinstance(self.mesh, Mesh3D):
             self._defaults3d()
             check_mesh3d(self.mesh, require=())
@@ -135,6 +141,7 @@ class Problem(Generic[MeshT]):
         named = [
             *(c for c in self.clamped if c != "clamped" or c in self.mesh.part_names),
             *(d.part for d in self.displacement),
+            *(r.part for r in self.rigid),
             *self.tractions,
             *(c.part for c in self.parts),
         ]
@@ -247,7 +254,7 @@ class Problem(Generic[MeshT]):
     @cached_property
     def constraints(self) -> Constraints:
         """The constrained dofs: clamped parts and prescribed components."""
-        return Constraints(self.mesh, self.clamped, self.displacement, self.space)
+        return Constraints(self.mesh, self.clamped, self.displacement, self.space, self.rigid)
 
     @cached_property
     def contact(self) -> ContactBoundary:
@@ -350,6 +357,8 @@ class Problem(Generic[MeshT]):
             "parts": list(m.part_names),
             "clamped": list(self.clamped),
             "displacement": [d.describe() for d in self.displacement],
+            # rigid parts only when there are some (earlier fingerprints stay valid)
+            **({"rigid": [r.describe() for r in self.rigid]} if self.rigid else {}),
             "gap": desc(self.gap),
             "contacts": [
                 {

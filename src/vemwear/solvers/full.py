@@ -15,6 +15,7 @@ import scipy.sparse as sp
 from .backends import factorize
 from .newton import NewtonOptions
 from .rigid import (
+    _pressed,
     anchored_factor,
     bordered_jacobian,
     cold_start,
@@ -49,12 +50,14 @@ class FullNewton:
         self, step: StepData, guess: StepSolution | None = None, recover: bool = True
     ) -> StepSolution:
         s, opt, rig = self.system, self.options, self.rigid
-        if guess is not None and guess.u is not None:
-            u, p_rigid = np.array(guess.u, copy=True), np.array(guess.p_rigid, copy=True)
         if rig is not None and rig.negligible(step.F):
             return self._touching(step)
-        if guess is not None and guess.u is not None:
-            pass
+        warm = guess is not None and guess.u is not None
+        if warm and rig is not None:  # a previous level that touched without force: cold
+            warm = _pressed(s, s.N @ guess.u, guess.p_rigid, step.w)  # type: ignore[union-attr]
+        if warm:
+            u = np.array(guess.u, copy=True)  # type: ignore[union-attr]
+            p_rigid = np.array(guess.p_rigid, copy=True)  # type: ignore[union-attr]
         elif rig is not None:  # the rigid motion to the condensed Newton's cold start
             y0, p_rigid = cold_start(s, step.w)
             u = rig.R @ (rig.pinv_NR @ y0)

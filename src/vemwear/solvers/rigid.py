@@ -255,6 +255,8 @@ def newton_rigid(solver: Any, step: StepData, d: NDArray, start: tuple | None, i
     f_R, negligible = rig.load_of(step.F)
     if negligible:
         return touching(s, rig, step, d)
+    if start is not None and not _pressed(s, start[0], start[1], wear):
+        start = None  # the previous level touched without force (a load ramped from 0)
     y, p_rigid = cold_start(s, wear) if start is None else start
     wf = w * fric
     inv_g = solver.inv_g_ref
@@ -302,6 +304,13 @@ def newton_rigid(solver: Any, step: StepData, d: NDArray, start: tuple | None, i
         y = np.where(active, g, y + sol[:m])
         p_rigid = np.where(active, p_rigid + sol[:m], 0.0)
         a = a + sol[m:]
+
+
+def _pressed(system: ContactSystem, y: NDArray, p_rigid: NDArray, wear: NDArray) -> bool:
+    """Whether some contact node holds the body at (y, p_rigid): on the rigid layer, or
+    in the soft layer where it is stiff (else Newton's first matrix is singular)."""
+    active = p_rigid + system.c_ncp * (y - system.g) > 0.0
+    return bool(np.any(active) or np.any(system.p.derivative(y - wear)))
 
 
 def _errors(
