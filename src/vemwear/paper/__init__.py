@@ -41,6 +41,7 @@ EXAMPLES: dict[str, str] = {
     "5.4": "ex54",
     "5.5": "ex55",
     "3d": "ex3d",
+    "hertz": "hertz",
 }
 
 #: Example number -> one-line description (``vemwear example --list``).
@@ -55,6 +56,8 @@ DESCRIPTIONS: dict[str, str] = {
     "(paper Tables 1 and 2)",
     "3d": "the block in 3D: 1024 hexahedra against 1024 Voronoi polyhedra, and wear errors "
     "for h = k = 1/2, 1/4, 1/8 against 1/16 (not in the paper)",
+    "hertz": "2D line contact and 3D sphere under load control against Hertz's closed forms, "
+    "errors against refinement (not in the paper)",
 }
 
 
