@@ -43,7 +43,7 @@ def test_the_configs_are_package_data() -> None:
     assert (files("vemwear") / "py.typed").is_file()
     assert (files("vemwear") / "__init__.pyi").is_file()
     with pytest.raises(
-        KeyError, match="available: block_displacement, example_3d, example_5_2_set1"
+        KeyError, match="available: ball_on_flat, block_displacement, example_3d, example_5_2"
     ):
         config_path("example_9")
 
@@ -187,3 +187,35 @@ def test_fretting_runs_its_cycles_through_the_command_line(tmp_path: Path) -> No
         wear = z["wear"]
     assert np.all(np.diff(wear.max(axis=1)) > 0)
     assert (tmp_path / "out" / "wear_by_cycle.png").is_file()
+
+
+# ----------------------------------------------------------------------------- tribometers
+def test_ball_on_flat_wears_a_scar_under_its_holders_load() -> None:
+    """The shipped ball on flat, small: the holder's force is the ramped dead load, the
+    contact forces balance it, the scar is deepest under the ball's lowest point."""
+    cfg = _beyond("ball_on_flat", **{"mesh.divisions": [8, 8, 4], "time.steps": 8})
+    pr = cfg.problem
+    assert pr.rigid_basis.shape == (1, 6)  # held along z by contact alone
+    res = simulate(pr, cfg.solver, store="final")
+    assert res.residuals.max() <= cfg.solver.tol
+    load = 0.02 * np.minimum(res.t / 0.1, 1.0)
+    assert np.abs(res.forces[:, -1, 2] + load).max() <= 1e-14
+    assert np.abs(res.forces.sum(axis=1)).max() <= 1e-12 * 0.02
+    assert np.allclose(res.contact_points[np.argmax(res.wear[-1])], [0.0, 0.0, 0.0])
+
+
+def test_fretting_cylinder_runs_its_cycles_under_load_control(tmp_path: Path) -> None:
+    from vemwear.cli.main import main
+
+    text = config_path("fretting_cylinder").read_text(encoding="utf-8")
+    text = text.replace("divisions = [64, 32]", "divisions = [16, 8]")
+    text = text.replace("steps = 16", "steps = 8")
+    text = text.replace("cycles = 200, jump = 20", "cycles = 6, jump = 2")
+    cfg = tmp_path / "fretting_cylinder.toml"
+    cfg.write_text(text + "vtk = false\nfigures = false\n")
+    assert main(["run", str(cfg), "-o", str(tmp_path / "out"), "--no-progress"]) == 0
+    with np.load(tmp_path / "out" / "cycles.npz") as z:
+        wear = z["wear"]
+    assert np.all(np.diff(wear.max(axis=1)) > 0)
+    with np.load(tmp_path / "out" / "result.npz") as z:
+        assert np.abs(z["forces"][:, -1, 1] + 0.05).max() <= 1e-14
