@@ -258,3 +258,92 @@ def test_bad_sliding_fields() -> None:
         config("[1.0, 0.0]", 'friction_on = "rigid"')
     with pytest.raises(ValueError, match="in 2D the axis"):
         RotatingFoundation(center=(0.0, 0.0), axis=(0.0, 1.0, 0.0))
+
+
+# ------------------------------------------------------ every earlier v* form, bitwise
+def _p2(v, f1=(0.0, -0.06)) -> Problem:
+    mesh = tag_rectangle(
+        rectangle_squares((2.0, 1.0), (8, 4)),
+        {"clamped": "left", "traction": ["top", "right"], "contact": "bottom"},
+    )
+    return Problem(
+        mesh=mesh,
+        material=Material(4.0, 4.0),
+        time=TimeGrid.uniform(1.0, 16),
+        f1=f1,
+        p=LinearCompliance(0.4),
+        g=0.1,
+        mu=0.2,
+        kappa=2.0,
+        v_star=v,
+    )
+
+
+def _p3(v, f1=(0.0, 0.0, -0.06)) -> Problem:
+    mesh = tag_box(
+        box_hexahedra((2.0, 1.0, 1.0), (4, 2, 2)),
+        {"clamped": "xmin", "contact": "zmin", "traction": ["xmax", "ymin", "ymax", "zmax"]},
+    )
+    return Problem(
+        mesh,
+        Material(4.0, 4.0),
+        TimeGrid.uniform(1.0, 16),
+        f1=f1,
+        p=LinearCompliance(0.4),
+        g=0.1,
+        mu=0.2,
+        kappa=2.0,
+        v_star=v,
+    )
+
+
+def _cfg(v: str) -> Problem:
+    text = CONFIG.format(v=v, extra="").replace("steps = 8", "steps = 32")
+    return parse_config(tomllib.loads(text)).problem
+
+
+#: sha256 (first 32 hex digits) of wear, u, p_soft, p_rigid and forces of the condensed
+#: Newton's run of each v* form, computed before sliding fields and two friction rows
+#: were added: those forms take the same arithmetic as before, bitwise
+BEFORE = {
+    "const2": ("456aa440f7ef0679d123f5b05a647075", lambda: _p2((1.0, 0.0))),
+    "const2_rigid": (
+        "29875b89cd29ad21f45d59a8654c017a",
+        lambda: _p2((1.0, 0.0), f1=(0.0, -0.6)),
+    ),
+    "oblique2": ("456aa440f7ef0679d123f5b05a647075", lambda: _p2((1.0, 0.3))),
+    "table2": (
+        "1fd3983bb49a513f6b1b1e8f266fbc9a",
+        lambda: _p2({"t": [0.0, 0.5, 1.0], "values": [[1.0, 0.0], [-1.0, 0.2], [0.5, 0.0]]}),
+    ),
+    "callable2": (
+        "053c309bb3727ddc3311790f66f2192b",
+        lambda: _p2(lambda t: (np.cos(2 * np.pi * t), 0.0)),
+    ),
+    "const3": ("ed63ef07790ed771c0424f82b5999630", lambda: _p3((1.0, 0.0, 0.0))),
+    "line3": (
+        "c0321cf92002d3960b4b12b6bc398a2c",
+        lambda: _p3(lambda t: (1 - 1.5 * t) * np.array([1.0, 0.5, 0.3])),
+    ),
+    "line3_rigid": (
+        "0f2b11fb1667c7f96ebdc829b3078dbb",
+        lambda: _p3((0.6, 0.8, 0.0), f1=(0.0, 0.0, -0.6)),
+    ),
+    "expr_cfg": ("7a852dcf131529e1f76fcab2a59f5174", lambda: _cfg('["cos(2*pi*t)", 0.0]')),
+    "table_cfg": (
+        "c970ab4e7767a65f4540aa99c48f7dca",
+        lambda: _cfg("{ t = [0.0, 1.0], values = [[1.0, 0.0], [-1.0, 0.0]] }"),
+    ),
+}
+
+
+@pytest.mark.parametrize("case", list(BEFORE))
+def test_earlier_velocity_forms_bitwise(case) -> None:
+    import hashlib
+
+    digest, make = BEFORE[case]
+    r = simulate(make(), "newton")
+    h = hashlib.sha256()
+    for key in ("wear", "u", "p_soft", "p_rigid", "forces"):
+        h.update(np.ascontiguousarray(getattr(r, key)).tobytes())
+    assert h.hexdigest()[:32] == digest
