@@ -181,6 +181,36 @@ def test_friction_on_the_total_pressure(wear_on) -> None:
     assert rel(res.wear[1], k * alpha * pressure) < 1e-13
 
 
+@pytest.mark.parametrize("order", [1, 2])
+def test_field_and_total_friction_in_2d(order) -> None:
+    """A 2D field v*(x, t) = ((1 + x) cos 2 pi t, 0) with friction and wear on the whole
+    pressure, k = 1 and k = 2 (the trace operator): the three solvers agree, and the wear
+    rate of each node is kappa (1 + x) |cos 2 pi t|."""
+    mesh = tag_rectangle(
+        rectangle_squares((2.0, 1.0), (8, 4)),
+        {"clamped": "left", "traction": ["top", "right"], "contact": "bottom"},
+    )
+    v = FoundationVelocity(
+        lambda x, t: np.column_stack([(1 + x[:, 0]) * np.cos(2 * np.pi * t), 0 * x[:, 0]]),
+        spatial=True,
+    )
+    part = ContactPart(
+        "contact", LinearCompliance(0.4), 0.05, 0.2, 2.0, v, friction_on="total", wear_on="total"
+    )
+    pr = Problem(
+        mesh=mesh,
+        material=Material(4.0, 4.0),
+        time=TimeGrid.uniform(1.0, 8),
+        f1=(0.0, -0.6),
+        contacts=(part,),
+        order=order,
+    )
+    res = agree(pr)
+    assert res.p_rigid.max() > 0
+    x = pr.contact.points[:, 0]
+    assert np.allclose(pr.discrete.alpha(0.125), 2.0 * (1 + x) * np.cos(np.pi / 4), rtol=1e-14)
+
+
 def test_friction_on_soft_is_the_paper() -> None:
     """The default, friction_on = "soft": the rigid layer's pressure has no friction."""
     pr = pin((1.0, 0.0, 0.0), g=0.02)

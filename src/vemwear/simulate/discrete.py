@@ -153,6 +153,7 @@ class Discretization:
         self._solvers: dict[Any, Any] = {}
         self._resultants: _Resultants | None = None
         self._sliding_at: _Sliding | None = None
+        self._sliding_prev: _Sliding | None = None
         self._K_cc = sp.csr_matrix((0, 0))
 
     def _contact_offset(self, cdofs: NDArray[np.int64]) -> NDArray[np.float64]:
@@ -256,6 +257,14 @@ class Discretization:
     def _sliding(self, t: float) -> _Sliding:
         """:meth:`tangential_velocity` with the friction coefficients and wear rate."""
         s = self._sliding_at
+        if s is not None and s.t != t and not self.steady_sliding:
+            # the loop asks for alpha(t_n) and the friction of t_{n+1} in turn: the two
+            # last times are kept
+            prev = self._sliding_prev
+            self._sliding_prev = s
+            if prev is not None and prev.t == t:
+                self._sliding_at = prev
+                return prev
         if s is None or (s.t != t and not self.steady_sliding):
             cb = self.contact
             if cb.tangents2 is not None:

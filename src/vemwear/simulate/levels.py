@@ -205,6 +205,12 @@ def run_levels(
 
     def predicted(n_: int, w_: Any, guess_: StepSolution) -> None:
         first = d.step_data(n_, w_)
+        if (
+            d.system.rows > 1
+            and n_ + 1 < L
+            and not np.array_equal(d.friction(float(tgrid[n_ + 1])), first.fric)
+        ):
+            return  # a turning v*: the friction changes at the next level, no run to make
         ws = [w_]
 
         def advance(p_soft: Any) -> Any:
