@@ -13,6 +13,7 @@ from vemwear.config import ConfigError, parse_config
 from vemwear.contact import ContactPart, FoundationVelocity, LinearCompliance, RotatingFoundation
 from vemwear.mesh import rectangle_squares, tag_rectangle
 from vemwear.mesh.generate3d import box_hexahedra, tag_box
+from vemwear.post.forces import force_table
 from vemwear.simulate import Prescribed, Problem, SolverOptions, TimeGrid, simulate
 from vemwear.vem import Material
 
@@ -94,6 +95,10 @@ def test_disc_turning_under_a_pin() -> None:
     assert np.all(force[up, 0] < 0) and np.all(force[down, 0] > 0)
     # the wear of the first step: k kappa |omega| r p(u_nu - w)
     assert rel(res.wear[1], (1 / 6) * 2.0 * omega * r * res.p_soft[0]) < 1e-13
+    # the force table gives the magnitude of the tangential force (no one direction)
+    row = force_table(res)[0]
+    F = res.forces[-1, 0]
+    assert row["tangential"] == pytest.approx(np.hypot(F[0], F[1]), rel=1e-12)
 
 
 def test_disc_in_2d_equals_its_tangential_velocity() -> None:

@@ -67,8 +67,8 @@ class Problem(Generic[MeshT]):
         ``traction`` (Gamma_N) and ``contact`` (Gamma_C). On a :class:`Mesh3D` (k = 1,
         docs/method.md section 10) the boundary facets are faces, the loads, v* and the
         prescribed components have three components (the 2-vector defaults of f1, f2
-        and v* become (0, 0, 0), (0, 0, 0) and (1, 0, 0)), and v* must keep one line
-        (:func:`~vemwear.contact.velocity_line`).
+        and v* become (0, 0, 0), (0, 0, 0) and (1, 0, 0)); a v* that turns gets two
+        friction rows per node (:func:`~vemwear.contact.foundation_rows`).
     material : Material
         Lamé coefficients lam, eta.
     time : TimeGrid
@@ -80,8 +80,10 @@ class Problem(Generic[MeshT]):
     g, mu, kappa : NodalField
         Layer thickness (> 0), friction coefficient (>= 0), wear coefficient (>= 0)
         along Gamma_C.
-    v_star : FoundationVelocity or 2-vector
-        Velocity of the foundation; it may vanish at some times (no friction and no
+    v_star : FoundationVelocity, RotatingFoundation or 2-vector
+        Velocity of the foundation, of t or a field of the points and t
+        (``FoundationVelocity(f, spatial=True)``, a :class:`~vemwear.contact.
+        RotatingFoundation`); it may vanish at some times and places (no friction and no
         wear there).
     stabilization : str
         ``"paper"`` (weight 1, the paper's dofi-dofi), ``"eta"`` or ``"trace"``.

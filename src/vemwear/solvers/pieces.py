@@ -12,7 +12,10 @@ function of the wear,
 with ``M = (C_NN W + C_NT W Fric) D``, ``J`` the reduced Newton matrix of the piece
 (``M`` with the columns of A replaced by those of ``C_NN W``, ones added on the
 diagonal off A) and ``c0 = d - (C_NN W + C_NT W Fric) q - (I + M)[:, A] g_A``. This
-is the iterate that one Newton step from any point of the piece gives.
+is the iterate that one Newton step from any point of the piece gives. Where friction
+acts on the whole pressure (``friction_total``), the columns of A in J are those of
+``C_NN W + C_NT W Fric`` at such nodes (Newton's reduced matrix), and the map is the
+same; with two friction rows per node (a v* that turns in 3D) ``C_NT W Fric`` sums them.
 
 Wear grows slowly, so a level mostly lies on the piece that Newton sees from the level
 before (the active set of the previous solution and the segments of ``y^{n-1} - w^n``).
