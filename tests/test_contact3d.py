@@ -71,12 +71,16 @@ def test_solvers_agree_in_3d(f1) -> None:
     assert np.abs(F.sum(axis=1) + weight).max() < 1e-10
 
 
-def test_turning_foundation_velocity_is_refused() -> None:
-    with pytest.raises(ValueError, match="one line"):
-        paper_problem(
-            box_hexahedra((2.0, 1.0, 1.0), (2, 1, 1)),
-            v_star=lambda t: (np.cos(3 * t), np.sin(3 * t), 0.0),
-        )
+def test_turning_foundation_velocity_gets_two_friction_rows() -> None:
+    """A v* that turns has the two fixed tangents of every node as friction rows
+    (tests/test_sliding.py runs it)."""
+    pr = paper_problem(
+        box_hexahedra((2.0, 1.0, 1.0), (2, 1, 1)),
+        v_star=lambda t: (np.cos(3 * t), np.sin(3 * t), 0.0),
+    )
+    cb = pr.contact
+    assert cb.tangents2 is not None and pr.discrete.system.Tau.shape[0] == 2 * cb.m
+    assert np.allclose(np.sum(cb.tangents * cb.tangents2, axis=1), 0.0)
 
 
 def test_free_rigid_motions_named_in_3d() -> None:

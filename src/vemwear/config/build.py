@@ -40,7 +40,7 @@ from ..vem import Material
 from . import schema as s
 from .checks import check_dims, check_loads, check_velocity
 from .errors import ConfigError, at, from_library, from_validation
-from .fields import FieldExpression, VelocityExpression, library_data
+from .fields import FieldExpression, library_data, velocity_data
 from .mesh_forms import MeshFile, mesh_family
 from .parts import Roles, contact_law, contact_parts, roles
 
@@ -267,7 +267,14 @@ def _problem(
                     else functools.partial(arc_length, mesh, n)
                 )
     name, ct, rt, _ = parts.contacts[0]
-    single = len(parts.contacts) == 1 and name == "contact"
+    # one part with the paper's friction and wear: the Problem's own keys (its
+    # fingerprint as before); otherwise contact parts
+    single = (
+        len(parts.contacts) == 1
+        and name == "contact"
+        and ct.friction_on == "soft"
+        and ct.wear_on == "soft"
+    )
     try:
         if single:
             with at(src, "[contact]", rt, key="p"):
@@ -277,12 +284,12 @@ def _problem(
                 "g": library_data(ct.g, None, None),
                 "mu": library_data(ct.mu, None, None),
                 "kappa": library_data(ct.kappa, None, None),
-                "v_star": library_data(ct.v_star, VelocityExpression, rt["v_star"]),
+                "v_star": velocity_data(ct.v_star, rt["v_star"]),
                 "gap": library_data(ct.gap, None, None),
             }
             contacts: tuple[Any, ...] = ()
         else:
-            top, contacts = {}, contact_parts(src, parts, library_data, VelocityExpression)
+            top, contacts = {}, contact_parts(src, parts, library_data, velocity_data)
         return Problem(
             mesh=mesh,
             material=material,

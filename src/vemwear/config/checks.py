@@ -21,7 +21,7 @@ from ..simulate import Problem
 from ..vem import body_force_vector, edge_load_vector
 from . import schema as s
 from .errors import ConfigError
-from .fields import FieldExpression, VelocityExpression
+from .fields import FieldExpression, VelocityExpression, VelocityField
 from .mesh_forms import MeshFile
 from .parts import Roles
 
@@ -68,11 +68,29 @@ def check_dims(src: str, c: s.ConfigFile, raw: Mapping[str, Any], dim: int) -> N
     for i, t in enumerate(tables):
         path = f"[[contact]] {i + 1}" if isinstance(raw["contact"], list) else "[contact]"
         v = t.get("v_star")
-        if isinstance(v, dict):
+        if isinstance(v, dict) and isinstance(v.get("rotation"), dict):
+            rotation(src, f"{path} v_star.rotation", v["rotation"], dim, what, need)
+        elif isinstance(v, dict):
             for j, row in enumerate(v.get("values", [])):
                 need(f"{path} v_star.values[{j}]", row)
         else:
             need(f"{path} v_star", v)
+
+
+def rotation(src: str, path: str, rot: Mapping[str, Any], dim: int, what: str, need: Any) -> None:
+    """A rotation's center has ``dim`` components; in 2D its axis is normal to the plane
+    (the in-plane velocity omega e_z x (x - c) needs it)."""
+    need(f"{path}.center", rot.get("center"))
+    axis = rot.get("axis", [0.0, 0.0, 1.0])
+    if dim == 2 and isinstance(axis, list) and len(axis) == 3:
+        a = np.asarray(axis, dtype=float)
+        n = float(np.linalg.norm(a))
+        if not (n > 0 and abs(a[0]) <= 1e-12 * n and abs(a[1]) <= 1e-12 * n):
+            raise ConfigError(
+                f"{src}: {path}.axis = {show_raw(axis)}: on {what} the foundation turns in "
+                "the plane, about (0, 0, 1) or (0, 0, -1); an axis with an x or y component "
+                "needs a 3D mesh"
+            )
 
 
 def show_raw(v: Any) -> str:
@@ -86,7 +104,10 @@ def check_velocity(src: str, pr: Problem, parts: Roles) -> None:
     may overflow or divide by zero)."""
     where = {name: path for name, _, _, path in parts.contacts}
     t = pr.time.t
-    for pc in pr.parts:
+    for i, pc in enumerate(pr.parts):
+        if pc.velocity.spatial:
+            _check_field(src, pr, i, where.get(pc.part, "[contact]"))
+            continue
         with np.errstate(all="ignore"):
             V = velocity_levels(pc.velocity, t)
         bad = np.flatnonzero(~np.all(np.isfinite(V), axis=1))
@@ -97,6 +118,26 @@ def check_velocity(src: str, pr: Problem, parts: Roles) -> None:
             raise ConfigError(
                 f"{src}: {where.get(pc.part, '[contact]')} v_star{text} is not finite at t = "
                 f"{t[n]:g} (level {n}): v* = ({V[n, 0]:g}, {V[n, 1]:g})"
+            )
+
+
+def _check_field(src: str, pr: Problem, i: int, path: str) -> None:
+    """A v* field is finite at every contact node of its part at every level (evaluated
+    level by level, vectorized over the nodes): the error names the first node and
+    level where it is not."""
+    cb, pc, t = pr.contact, pr.parts[i], pr.time.t
+    sel = np.flatnonzero(cb.part == i)
+    spec = pc.velocity.spec
+    text = f" = {spec.__name__}" if isinstance(spec, VelocityField) else ""
+    for n, x in enumerate(t):
+        with np.errstate(all="ignore"):
+            V = pc.velocity.at(cb.points[sel], float(x))
+        bad = np.flatnonzero(~np.all(np.isfinite(V), axis=1))
+        if bad.size:
+            a = int(sel[bad[0]])
+            raise ConfigError(
+                f"{src}: {path} v_star{text} is not finite at contact node {a} (x = "
+                f"{_pt(cb.points[a])}) at t = {x:g} (level {n}): v* = {_pt(V[bad[0]])}"
             )
 
 

@@ -3,9 +3,12 @@
 A coefficient ``g``, ``mu``, ``kappa`` or ``gap`` written as an expression in ``x, y,
 z`` becomes a :class:`NodalExpression` of the contact nodes, a load ``f1`` or ``f2``
 with expressions in ``x, y, z, t`` (or traction tables) a :class:`FieldExpression` of
-points and time, and a ``v_star`` with expressions in ``t`` a
-:class:`VelocityExpression` of time; :func:`library_data` turns any value of the
-schema (number, table, expression or array of these) into what the library takes.
+points and time, a ``v_star`` with expressions in ``t`` a :class:`VelocityExpression`
+of time, one with expressions in ``x, y, z`` (and ``t``) a :class:`VelocityField` of the
+contact nodes and time, and ``{ rotation = ... }`` a
+:class:`~vemwear.contact.RotatingFoundation`; :func:`library_data` turns any value of the
+schema (number, table, expression or array of these) into what the library takes,
+:func:`velocity_data` a ``v_star``.
 """
 
 from __future__ import annotations
@@ -17,11 +20,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..contact import table_values
+from ..contact import RotatingFoundation, table_values
 from .expr import Expression
 from .sections import Section
 
-__all__ = ["FieldExpression", "NodalExpression", "VelocityExpression", "library_data"]
+__all__ = [
+    "FieldExpression",
+    "NodalExpression",
+    "VelocityExpression",
+    "VelocityField",
+    "library_data",
+    "velocity_data",
+]
 
 
 class NodalExpression:
@@ -94,11 +104,58 @@ class VelocityExpression:
         )
 
 
+class VelocityField:
+    """``v_star`` of numbers and expressions in ``x, y, z, t``: ``v(points, t)`` -> (m, d)
+    at the (m, d) contact nodes (``z = 0`` in 2D); a field of the points (``spatial``)."""
+
+    spatial = True
+
+    def __init__(self, parts: Sequence[Expression | float], text: str) -> None:
+        self.parts, self.__name__ = tuple(parts), text
+
+    def __call__(self, points: NDArray[np.float64], t: float) -> NDArray[np.float64]:
+        P = np.asarray(points, dtype=float)
+        env = {"x": P[:, 0], "y": P[:, 1], "t": np.full(len(P), float(t))}
+        env["z"] = P[:, 2] if P.shape[1] == 3 else np.zeros(len(P))
+        return np.column_stack([_value(c, env) for c in self.parts])
+
+
+class OmegaExpression:
+    """The angular velocity of a rotation as an expression in ``t``: ``omega(t)``."""
+
+    def __init__(self, expr: Expression) -> None:
+        self.expr, self.__name__ = expr, expr.text
+
+    def __call__(self, t: float) -> float:
+        return float(self.expr(t=np.array([float(t)]))[0])
+
+
+def velocity(parts: Sequence[Expression | float], text: str) -> Any:
+    """A ``v_star`` array with expressions: of ``t`` alone, or a field of ``x, y, z``."""
+    if any(isinstance(c, Expression) and c.names & {"x", "y", "z"} for c in parts):
+        return VelocityField(parts, text)
+    return VelocityExpression(parts, text)
+
+
+def velocity_data(v: Any, raw: Any) -> Any:
+    """A ``v_star`` of the schema as the library takes it: an array (numbers,
+    expressions of t or of x, y, z, t), a table, or a rotation."""
+    rot = getattr(v, "rotation", None)
+    if rot is None:
+        return library_data(v, velocity, raw)
+    omega = rot.omega
+    return RotatingFoundation(
+        center=tuple(rot.center),
+        axis=tuple(rot.axis),
+        omega=OmegaExpression(omega) if isinstance(omega, Expression) else float(omega),
+    )
+
+
 def _value(c: Expression | float, env: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
     return c(**env) if isinstance(c, Expression) else np.full(len(env["t"]), float(c))
 
 
-def library_data(v: Any, cls: type | None, raw: Any) -> Any:
+def library_data(v: Any, cls: Callable[..., Any] | None, raw: Any) -> Any:
     """A number, table (as a dict) or expression of the schema as the library takes it."""
     if isinstance(v, Expression):
         return NodalExpression(v)

@@ -216,8 +216,10 @@ def contact_parts(src: str, r: Roles, data: Any, velocity: Any) -> tuple[Contact
                 data(ct.g, None, None),
                 data(ct.mu, None, None),
                 data(ct.kappa, None, None),
-                data(ct.v_star, velocity, rt["v_star"]),
+                velocity(ct.v_star, rt["v_star"]),
                 data(ct.gap, None, None),
+                friction_on=ct.friction_on,
+                wear_on=ct.wear_on,
             )
         )
     return tuple(out)

@@ -108,6 +108,7 @@ def reference_tables() -> dict[str, str]:
         "contact.p": _table(["type", *head], laws),
         "contact.table": _table(head, _rows(s.CoefficientTable)),
         "contact.v_star": _table(head, _rows(s.VelocityTable)),
+        "contact.rotation": _table(head, _rows(s.Rotation)),
         "time": _table(head, list(time.values())),
         "boundary.displacement": _table(head, _rows(s.DisplacementPart)),
         "time.cycle_jump": _table(head, _rows(s.CycleJumpTable)),

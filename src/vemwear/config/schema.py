@@ -109,6 +109,27 @@ class VelocityTable(Section):
         return self
 
 
+class Rotation(Section):
+    """A counterface turning about an axis: ``v* = omega a x (x - c)``."""
+
+    model_config = ConfigDict(title="{ center, axis, omega }")
+    center: Vector23 = Field(description="a point c of the axis [x, y] (3D: [x, y, z])")
+    axis: Annotated[list[float], Field(min_length=3, max_length=3)] = Field(
+        [0.0, 0.0, 1.0],
+        description="direction a of the axis (normalized); in 2D (0, 0, 1) or (0, 0, -1)",
+    )
+    omega: by_kind(  # type: ignore[valid-type]
+        "a number or an expression string in t", number=float, string=expression("t")
+    ) = Field(description="angular velocity (rad per unit time): a number or an expression in t")
+
+
+class VelocityRotation(Section):
+    """``v*`` of a rotating counterface (a disc turning under a pin)."""
+
+    model_config = ConfigDict(title="{ rotation = { center, axis, omega } }")
+    rotation: Rotation = Field(description="the axis and the angular velocity")
+
+
 LAWS: dict[str, type[Section]] = {"linear": LinearLaw, "table": TableLaw}
 
 
@@ -136,11 +157,24 @@ Coefficient: TypeAlias = by_kind(  # type: ignore[valid-type]
 )
 
 
-VStar: TypeAlias = by_kind(  # type: ignore[valid-type]
-    "an array [vx, vy] (3D: [vx, vy, vz]) of numbers or expression strings in t, or a table "
-    "{ t, values }",
-    array=components("t"),
+def _vstar_form(v: Any) -> str | None:
+    if isinstance(v, list):
+        return "array"
+    if isinstance(v, dict):
+        return "rotation" if "rotation" in v else "table"
+    return None
+
+
+VStar: TypeAlias = choice(  # type: ignore[valid-type]
+    _vstar_form,
+    lambda v: (
+        "must be an array [vx, vy] (3D: [vx, vy, vz]) of numbers or expression strings "
+        f"in x, y, z, t, a table {{ t, values }} or {{ rotation = {{ center, axis, omega }} }}, "
+        f"{got(v)}"
+    ),
+    array=components("x", "y", "z", "t"),
     table=VelocityTable,
+    rotation=VelocityRotation,
 )
 Load: TypeAlias = components("x", "y", "z", "t")  # type: ignore[valid-type]
 TractionComponent: TypeAlias = by_kind(  # type: ignore[valid-type]
@@ -178,10 +212,24 @@ class Contact(Section):
         description="wear coefficient, >= 0 (wear rate kappa |v*_tau| p, v*_tau the part of "
         "v* along the boundary)"
     )
-    v_star: VStar = Field(description="velocity of the foundation; it may vanish at times")
+    v_star: VStar = Field(
+        description="velocity of the foundation, of t or a field of x, y, z and t; it may "
+        "vanish at times and places"
+    )
     gap: Coefficient = Field(
         0.0,
         description="initial gap between the body and the layer, >= 0 (penetration u_nu - gap - w)",
+    )
+    friction_on: Literal["soft", "total"] = Field(
+        "soft",
+        description="pressure friction acts on: 'soft', the soft layer's p(u_nu - w) (the "
+        "paper's law), or 'total', the whole contact pressure p(u_nu - w) + p_rigid (Coulomb "
+        "friction on the rigid layer too)",
+    )
+    wear_on: Literal["soft", "total"] = Field(
+        "soft",
+        description="pressure of the wear rate kappa |v*_tau| p: 'soft' (the soft layer "
+        "wears, the rigid layer does not) or 'total' (the whole contact pressure)",
     )
 
 

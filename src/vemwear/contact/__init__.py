@@ -1,8 +1,8 @@
 """The contact part: nodal quadrature on Gamma_C, compliance laws, coefficients, v*(t)."""
 
 from .boundary import ContactBoundary, arc_length, contact_boundary
-from .boundary3d import contact_boundary3d, velocity_line
-from .data import FoundationVelocity, NodalField, nodal_values, table_values
+from .boundary3d import contact_boundary3d, foundation_rows, sliding_lines, velocity_line
+from .data import FoundationVelocity, NodalField, RotatingFoundation, nodal_values, table_values
 from .law import (
     CallableCompliance,
     ComplianceLaw,
@@ -11,9 +11,18 @@ from .law import (
     as_law,
     check_law,
 )
-from .parts import ContactPart, NodalLaw, tangential_velocity, velocity_levels
+from .parts import (
+    PRESSURES,
+    ContactPart,
+    NodalLaw,
+    nodal_velocity,
+    tangential_components,
+    tangential_velocity,
+    velocity_levels,
+)
 
 __all__ = [
+    "PRESSURES",
     "CallableCompliance",
     "ComplianceLaw",
     "ContactBoundary",
@@ -22,14 +31,19 @@ __all__ = [
     "LinearCompliance",
     "NodalField",
     "NodalLaw",
+    "RotatingFoundation",
     "TableCompliance",
     "arc_length",
     "as_law",
     "check_law",
     "contact_boundary",
     "contact_boundary3d",
+    "foundation_rows",
     "nodal_values",
+    "nodal_velocity",
+    "sliding_lines",
     "table_values",
+    "tangential_components",
     "tangential_velocity",
     "velocity_levels",
     "velocity_line",

@@ -48,6 +48,10 @@ class ContactBoundary:
     trace : (2 m, n_dof) sparse, optional
         Rows ``2 a + c``: component c of the displacement at node a from the dofs; None
         for k = 1, where node a is vertex ``nodes[a]`` and the rows pick its two dofs.
+    tangents2 : (m, 3), optional
+        3D with a foundation velocity that turns: the second tangent of every node; the
+        friction then has two rows per node, ``tangents`` and ``tangents2``
+        (:func:`~vemwear.contact.boundary3d.sliding_lines`).
     """
 
     nodes: NDArray[np.int64]
@@ -60,6 +64,7 @@ class ContactBoundary:
     part: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     part_names: tuple[str, ...] = ("contact",)
     trace: sp.csr_matrix | None = None
+    tangents2: NDArray[np.float64] | None = None
 
     def __post_init__(self) -> None:
         if len(self.part) != len(self.nodes):
@@ -68,6 +73,14 @@ class ContactBoundary:
     @property
     def m(self) -> int:
         return len(self.nodes)
+
+    @property
+    def friction_tangents(self) -> NDArray[np.float64]:
+        """The directions of the friction rows, (r m, d): ``tangents`` (r = 1), then
+        ``tangents2`` when v* turns in 3D (r = 2)."""
+        if self.tangents2 is None:
+            return self.tangents
+        return np.vstack([self.tangents, self.tangents2])
 
     @property
     def dim(self) -> int:
@@ -93,8 +106,15 @@ class ContactBoundary:
 
     @property
     def Tau(self) -> sp.csr_matrix:
-        """``Tau @ u = (u . tau_a)_a``, the tangential displacements at contact nodes."""
-        return self._component_operator(self.tangents)
+        """``Tau @ u = (u . tau_a)_a``, the tangential displacements at contact nodes
+        (with two friction rows, ``tangents2``: those along ``tau_1``, then ``tau_2``)."""
+        if self.tangents2 is None:
+            return self._component_operator(self.tangents)
+        return sp.csr_matrix(
+            sp.vstack(
+                [self._component_operator(self.tangents), self._component_operator(self.tangents2)]
+            )
+        )
 
     def friction_direction(self, n_star: NDArray[np.float64]) -> NDArray[np.float64]:
         """``n* . tau_a`` at every node, so that ``n* . v_tau(a) = (n* . tau_a)(v . tau_a)``."""

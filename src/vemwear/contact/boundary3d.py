@@ -7,21 +7,24 @@ constants and for linear fields on triangles and parallelograms), the unit norma
 ``nu_a`` (the weight-averaged outward normal of its contact faces, across edges and
 corners) and the tangent plane ``nu_a^perp``.
 
-Friction is folded into one tangential row per node as in 2D: the foundation velocity
-of a part keeps one line, ``v*(t) = s(t) e`` (its length and sign may change in time),
+Friction is folded into one tangential row per node as in 2D where the foundation
+velocity of a part keeps one line, ``v*(t) = s(t) e`` (its length and sign may change in time),
 so its tangential part at a node is ``v*_tau(a, t) = s(t) e_tau(a)`` with
 ``e_tau = e - (e . nu_a) nu_a``. The node's tangent ``tau_a = e_tau / |e_tau|`` is that
 line; then ``v* . tau_a = +-|v*_tau|``, the friction direction is
 ``n* = -sign(v* . tau_a) tau_a`` and the wear rate ``alpha = kappa |v* . tau_a|``,
 exactly the 2D formulas of :class:`~vemwear.simulate.discrete.Discretization`. Where
 ``e`` is normal to the face (``e_tau = 0``) the tangent is any unit tangent and
-``v* . tau_a = 0``: no friction and no wear there. A foundation velocity that turns in
-3D (two directions that are not parallel) would need the tangential row to change in
-time; it is refused (:func:`velocity_line`).
+``v* . tau_a = 0``: no friction and no wear there. A field ``v*(x, t)`` whose direction
+keeps one line at every node (a disc turning at a constant rate) has one row per node
+too, along its own line; a v* that turns in time at some node gets two fixed tangential
+rows per node, ``tau_1, tau_2``, whose coefficients follow ``v*_tau`` level by level
+(:func:`sliding_lines`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 
 import numpy as np
@@ -31,8 +34,93 @@ from ..mesh.polyhedra import Mesh3D
 from ..mesh.polymesh import MeshError
 from ..vem.space3d import P1Space3D, tangent_basis
 from .boundary import ContactBoundary
+from .parts import ContactPart, velocity_levels
 
-__all__ = ["contact_boundary3d", "velocity_line"]
+__all__ = ["contact_boundary3d", "foundation_rows", "sliding_lines", "velocity_line"]
+
+
+def _line_tangents(e: NDArray[np.float64], nu: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The unit tangents ``e_tau / |e_tau|`` of the lines ``e`` (m, 3) at nodes with
+    normals ``nu``; the first tangent of :func:`tangent_basis` where ``e`` is normal
+    (or zero)."""
+    e_tau = e - np.sum(e * nu, axis=1)[:, None] * nu
+    length = np.linalg.norm(e_tau, axis=1)
+    slides = length > 1e-12 * np.maximum(np.linalg.norm(e, axis=1), 1e-300)
+    tau, _ = tangent_basis(nu)
+    tau[slides] = e_tau[slides] / length[slides, None]
+    return tau
+
+
+def sliding_lines(cb: ContactBoundary, lines: NDArray[np.float64] | None) -> ContactBoundary:
+    """The contact boundary with the friction rows of a v* that is a field or turns.
+
+    Parameters
+    ----------
+    cb : ContactBoundary
+    lines : (m, 3) array or None
+        The line ``e_a`` of v* at every node (its direction at node a keeps one line in
+        time): one friction row per node, ``tau_a = e_tau / |e_tau|``, as for a v* of
+        one line. None: v* turns at some node, and friction gets two rows per node, the
+        fixed tangents ``tau_1, tau_2`` of :func:`tangent_basis` (``tangents`` and
+        ``tangents2``), whose coefficients ``mu n* . tau_k`` follow v*_tau level by
+        level (docs/method.md, section 10).
+    """
+    if lines is not None:
+        return dataclasses.replace(cb, tangents=_line_tangents(lines, cb.normals))
+    t1, t2 = tangent_basis(cb.normals)
+    return dataclasses.replace(cb, tangents=t1, tangents2=t2)
+
+
+def foundation_rows(
+    cb: ContactBoundary, parts: Sequence[ContactPart], t: NDArray[np.float64]
+) -> ContactBoundary:
+    """The contact boundary (built with each part's line of v*) with the friction rows
+    its foundation velocities need on the time grid ``t``: unchanged where every part's
+    v* is of the time alone and keeps one line; one row per node along the node's own
+    line where v* is a field whose direction keeps one line at every node; two rows per
+    node where v* turns at some node (:func:`sliding_lines`)."""
+    lines = np.zeros((cb.m, 3))
+    spatial = False
+    for i, pc in enumerate(parts):
+        sel = cb.part == i
+        if not pc.velocity.spatial:
+            try:
+                lines[sel] = velocity_line(velocity_levels(pc.velocity, t))
+            except ValueError:
+                return sliding_lines(cb, None)
+            continue
+        spatial = True
+        E, keeps = _field_lines(pc, cb.points[sel], t)
+        if not keeps:
+            return sliding_lines(cb, None)
+        lines[sel] = E
+    return sliding_lines(cb, lines) if spatial else cb
+
+
+def _field_lines(
+    pc: ContactPart, points: NDArray[np.float64], t: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], bool]:
+    """The line of a v* field at each of the points (the direction of its longest sample
+    over the levels) and whether every sample keeps it: two passes over the levels in
+    blocks of about a million numbers."""
+    m = len(points)
+    block = max(1, 2**20 // max(3 * m, 1))
+    top, E = np.zeros(m), np.zeros((m, 3))
+    for a in range(0, len(t), block):
+        with np.errstate(all="ignore"):
+            V = np.array([pc.velocity.at(points, float(x)) for x in t[a : a + block]])
+        speed = np.linalg.norm(V, axis=2)
+        j = np.argmax(speed, axis=0)
+        longer = speed[j, np.arange(m)] > top
+        top[longer] = speed[j, np.arange(m)][longer]
+        E[longer] = V[j, np.arange(m)][longer]
+    E /= np.where(top > 0, top, 1.0)[:, None]
+    for a in range(0, len(t), block):
+        with np.errstate(all="ignore"):
+            V = np.array([pc.velocity.at(points, float(x)) for x in t[a : a + block]])
+        if np.any(np.linalg.norm(np.cross(V, E[None]), axis=2) > 1e-12 * top[None]):
+            return E, False
+    return E, True
 
 
 def velocity_line(V: NDArray[np.float64], name: str = "v_star") -> NDArray[np.float64]:
@@ -129,12 +217,7 @@ def contact_boundary3d(
     nu = normal[nodes]
     if directions is None:
         directions = np.tile([1.0, 0.0, 0.0], (len(parts), 1))
-    e = np.asarray(directions, dtype=float).reshape(len(parts), 3)[part]
-    e_tau = e - np.sum(e * nu, axis=1)[:, None] * nu
-    length = np.linalg.norm(e_tau, axis=1)
-    slides = length > 1e-12 * np.maximum(np.linalg.norm(e, axis=1), 1e-300)
-    tau, _ = tangent_basis(nu)
-    tau[slides] = e_tau[slides] / length[slides, None]
+    tau = _line_tangents(np.asarray(directions, dtype=float).reshape(len(parts), 3)[part], nu)
     points = mesh.points[nodes]
     return ContactBoundary(
         nodes=nodes,

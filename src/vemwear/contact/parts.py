@@ -19,7 +19,18 @@ from numpy.typing import ArrayLike, NDArray
 from .data import FoundationVelocity, NodalField
 from .law import ComplianceLaw, LinearCompliance
 
-__all__ = ["ContactPart", "NodalLaw", "tangential_velocity", "velocity_levels"]
+__all__ = [
+    "PRESSURES",
+    "ContactPart",
+    "NodalLaw",
+    "nodal_velocity",
+    "tangential_velocity",
+    "velocity_levels",
+]
+
+#: The pressures friction and wear may act on: the soft layer's or the whole contact
+#: pressure (soft + rigid).
+PRESSURES = ("soft", "total")
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,10 +47,18 @@ class ContactPart:
         Thickness of the soft layer (> 0), friction coefficient (>= 0), wear
         coefficient (>= 0) along the part.
     v_star : FoundationVelocity or 2-vector
-        Velocity of the foundation under this part.
+        Velocity of the foundation under this part (of the time, or a field of the
+        points and the time: :class:`~vemwear.contact.data.FoundationVelocity`).
     gap : NodalField
         Initial gap (>= 0) between the body and the layer: the penetration is
         ``u_nu - gap - w`` and the constraint ``u_nu - gap <= g``.
+    friction_on : {"soft", "total"}
+        The pressure friction acts on: the soft layer's, ``mu p(u_nu - w) n*`` (the
+        paper's law 2.8), or the whole contact pressure, ``mu (p(u_nu - w) + p_rigid)
+        n*`` (Coulomb friction on the rigid layer too; docs/method.md, section 4b).
+    wear_on : {"soft", "total"}
+        The pressure of Archard's wear rate: the soft layer's (the paper's 2.9; the
+        rigid layer does not wear) or the whole contact pressure.
     """
 
     part: str = "contact"
@@ -49,10 +68,18 @@ class ContactPart:
     kappa: NodalField = 0.0
     v_star: FoundationVelocity | ArrayLike = (1.0, 0.0)
     gap: NodalField = 0.0
+    friction_on: str = "soft"
+    wear_on: str = "soft"
 
     def __post_init__(self) -> None:
         if not isinstance(self.v_star, FoundationVelocity):
             object.__setattr__(self, "v_star", FoundationVelocity(self.v_star))
+        for key in ("friction_on", "wear_on"):
+            if getattr(self, key) not in PRESSURES:
+                raise ValueError(
+                    f"{key} of contact part {self.part!r} must be 'soft' or 'total', got "
+                    f"{getattr(self, key)!r}"
+                )
 
     @property
     def velocity(self) -> FoundationVelocity:
@@ -96,20 +123,47 @@ class NodalLaw(ComplianceLaw):
         return {"type": "by part", "laws": [law.describe() for law in self.laws]}
 
 
+def nodal_velocity(
+    parts: Sequence[ContactPart],
+    part: NDArray[np.int64],
+    points: NDArray[np.float64],
+    t: float,
+) -> NDArray[np.float64]:
+    """``v*(x_a, t)`` at every contact node, (m, d), with the v* of the node's part: a
+    v* of the time alone is evaluated once per part, a field at the part's nodes."""
+    if not any(pc.velocity.spatial for pc in parts):
+        return np.array([pc.velocity(t) for pc in parts])[part]
+    v = np.empty(np.shape(points))
+    for i, pc in enumerate(parts):
+        sel = part == i
+        if np.any(sel):
+            v[sel] = pc.velocity.at(points[sel], t)
+    return v
+
+
 def tangential_velocity(
     parts: Sequence[ContactPart],
     part: NDArray[np.int64],
     tangents: NDArray[np.float64],
     t: float,
+    points: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """``v*(t) . tau_a`` at every contact node, with the v* of the node's part.
+    """``v*(x_a, t) . tau_a`` at every contact node, with the v* of the node's part
+    (``points``, the nodes, are needed for a v* that is a field).
 
     The tangential part of the foundation velocity is ``v*_tau = (v* . tau_a) tau_a``
     in 2D; its sign gives the friction direction ``n* = -v*_tau / |v*_tau|`` and its
     length the wear rate ``alpha = kappa |v*_tau|`` (docs/method.md, section 3b).
     """
-    V = np.array([pc.velocity(t) for pc in parts])  # (n_parts, d)
-    v = V[part]
+    if points is None:
+        if any(pc.velocity.spatial for pc in parts):
+            raise ValueError("tangential_velocity: a v* field needs the contact points")
+        points = np.zeros((len(part), tangents.shape[1]))
+    return tangential_components(nodal_velocity(parts, part, points, t), tangents)
+
+
+def tangential_components(v: NDArray[np.float64], tangents: NDArray[np.float64]) -> NDArray:
+    """``v_a . tau_a`` of (m, d) velocities and tangents, component by component."""
     if tangents.shape[1] != v.shape[1]:
         raise ValueError(
             f"v_star has {v.shape[1]} components, the contact tangents {tangents.shape[1]}"
@@ -121,7 +175,8 @@ def tangential_velocity(
 
 
 def velocity_levels(v: FoundationVelocity, t: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``v*(t_n)`` at many times at once, (len(t), d), not checked for being finite.
+    """``v*(t_n)`` at many times at once, (len(t), d), not checked for being finite
+    (a v* of the time alone; a field: :func:`nodal_velocity` level by level).
 
     Numbers and tables of t are evaluated in one go, as is a callable with a method
     ``at_times(t)`` (the expressions of a configuration file); any other callable one

@@ -34,16 +34,31 @@ def part_directions(result: Result) -> dict[str, NDArray[np.float64]]:
     return out
 
 
-def _tangent(result: Result, name: str, n: NDArray[np.float64]) -> NDArray[np.float64]:
+def _tangent(result: Result, name: str, n: NDArray[np.float64]) -> NDArray[np.float64] | None:
     """The direction of the tangential force of a contact part: in 2D the normal turned
     by 90 degrees; in 3D the mean (weighted) nodal tangent, the direction of the
-    foundation's tangential velocity."""
+    foundation's tangential velocity, when the part's friction rows keep one direction;
+    None where they do not (a v* that turns or differs from node to node, as a disc
+    turning under the part): the tangential force is then given by its magnitude."""
     if len(n) == 2:
         return np.array([-n[1], n[0]])
     cb = result.problem.contact
     sel = cb.part == cb.part_names.index(name)
+    if cb.tangents2 is not None:
+        return None
     tau = (cb.weights[sel, None] * cb.tangents[sel]).sum(axis=0)
-    return np.asarray(tau / max(float(np.linalg.norm(tau)), 1e-300))
+    length = float(np.linalg.norm(tau))
+    if length < (1.0 - 1e-9) * float(cb.weights[sel].sum()):  # the tangents differ
+        return None
+    return np.asarray(tau / max(length, 1e-300))
+
+
+def _tangential(F: NDArray[np.float64], n: NDArray[np.float64], tau: Any) -> Any:
+    """The tangential force of resultants ``F`` (..., d): along ``tau``, or the length
+    of the part normal to ``n`` where ``tau`` is None."""
+    if tau is not None:
+        return F @ tau
+    return np.linalg.norm(F - np.multiply.outer(F @ n, n), axis=-1)
 
 
 def force_table(result: Result) -> list[dict[str, Any]]:
@@ -66,7 +81,7 @@ def force_table(result: Result) -> list[dict[str, Any]]:
         if kind == "contact":
             n = normals[name]
             row["normal"] = float(-last @ n)
-            row["tangential"] = float(last @ _tangent(result, name, n))
+            row["tangential"] = float(_tangential(last, n, _tangent(result, name, n)))
         rows.append(row)
     return rows
 
@@ -89,7 +104,11 @@ def plot_forces(result: Result, path: str | os.PathLike[str] | None = None) -> F
             n = normals[name]
             ax_c.plot(t, -F[:, j] @ n, lw=1.8, label=f"{name}: normal")
             ax_c.plot(
-                t, F[:, j] @ _tangent(result, name, n), lw=1.4, ls="--", label=f"{name}: tangential"
+                t,
+                _tangential(F[:, j], n, _tangent(result, name, n)),
+                lw=1.4,
+                ls="--",
+                label=f"{name}: tangential",
             )
         else:
             ax_r.plot(t, F[:, j, 0], lw=1.6, label=f"{name}: $R_x$")

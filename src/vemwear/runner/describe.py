@@ -137,6 +137,9 @@ def _contact_rows(pr: Problem) -> Rows:
     for i, pc in enumerate(pr.parts):
         sel = np.asarray(cb.part == i)
         gap = f"; gap {rng('gap', sel)}" if np.any(nodal["gap"][sel]) else ""
+        gap += "".join(
+            f"; {key} total" for key in ("friction_on", "wear_on") if getattr(pc, key) != "soft"
+        )
         rows.append(
             (
                 "contact" if len(pr.parts) == 1 else f"contact {pc.part}",

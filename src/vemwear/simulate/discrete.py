@@ -20,7 +20,14 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..contact import ContactBoundary, tangential_velocity, velocity_levels
+from ..contact import (
+    ContactBoundary,
+    ContactPart,
+    nodal_velocity,
+    tangential_components,
+    tangential_velocity,
+    velocity_levels,
+)
 from ..solvers.system import ContactSystem, StepData, StepSolution
 from .constraints import describe_motions
 
@@ -122,11 +129,13 @@ class Discretization:
         # load control: the rigid motions that only contact holds (docs/method.md 1c)
         basis = problem.rigid_basis
         rigid = con.rigid_modes(basis)[self.free] if len(basis) else None
+        parts = problem.parts
+        on = [pc.friction_on == "total" for pc in parts]
         self.system = ContactSystem(
             K=K,
             contact_dofs=cdofs,
             normals=cb.normals,
-            tangents=cb.tangents,
+            tangents=cb.friction_tangents,
             weights=cb.weights,
             g=self.g if self.shift is None else self.g + self.shift,
             p=problem.law,
@@ -135,7 +144,12 @@ class Discretization:
             rigid=rigid,
             rigid_names=tuple(describe_motions(mesh, basis)) if rigid is not None else (),
             contact_names=tuple(cb.part_names),
+            friction_total=np.array(on)[cb.part] if any(on) else None,
         )
+        wear = [pc.wear_on == "total" for pc in parts]
+        #: the nodes whose wear rate takes the whole contact pressure (``wear_on =
+        #: "total"``), None if there are none: the soft layer wears, the rigid one not
+        self.wear_total = np.array(wear)[cb.part] if any(wear) else None
         #: whether the load F of the step problems is the same at all times (then
         #: :meth:`load` gives one array object)
         self.constant_load = not (
@@ -148,6 +162,7 @@ class Discretization:
         self._solvers: dict[Any, Any] = {}
         self._resultants: _Resultants | None = None
         self._sliding_at: _Sliding | None = None
+        self._sliding_prev: _Sliding | None = None
         self._K_cc = sp.csr_matrix((0, 0))
 
     def _contact_offset(self, cdofs: NDArray[np.int64]) -> NDArray[np.float64]:
@@ -251,15 +266,42 @@ class Discretization:
     def _sliding(self, t: float) -> _Sliding:
         """:meth:`tangential_velocity` with the friction coefficients and wear rate."""
         s = self._sliding_at
+        if s is not None and s.t != t and not self.steady_sliding:
+            # the loop asks for alpha(t_n) and the friction of t_{n+1} in turn: the two
+            # last times are kept
+            prev = self._sliding_prev
+            self._sliding_prev = s
+            if prev is not None and prev.t == t:
+                self._sliding_at = prev
+                return prev
         if s is None or (s.t != t and not self.steady_sliding):
             cb = self.contact
-            v = tangential_velocity(self.problem.parts, cb.part, cb.tangents, t)
-            v[np.abs(v) <= self._velocity_roundoff] = 0.0
-            # n* . tau_a = -sign(v*_tau . tau_a): friction opposes the tangential
-            # sliding, and vanishes where the foundation does not slide along the boundary
-            s = _Sliding(t, v, self.mu * -np.sign(v), self.kappa * np.abs(v))
+            if cb.tangents2 is not None:
+                s = self._turning(t)
+            else:
+                v = tangential_velocity(self.problem.parts, cb.part, cb.tangents, t, cb.points)
+                v[np.abs(v) <= self._velocity_roundoff] = 0.0
+                # n* . tau_a = -sign(v*_tau . tau_a): friction opposes the tangential
+                # sliding, and vanishes where the foundation does not slide along the
+                # boundary
+                s = _Sliding(t, v, self.mu * -np.sign(v), self.kappa * np.abs(v))
             self._sliding_at = s
         return s
+
+    def _turning(self, t: float) -> _Sliding:
+        """The sliding data with two friction rows (3D, v* turns): ``v`` holds ``v* .
+        tau_1`` then ``v* . tau_2`` (2m,), ``fric`` the coefficients ``mu n* . tau_k =
+        -mu (v* . tau_k) / |v*_tau|`` of the rows, ``alpha = kappa |v*_tau|``."""
+        cb = self.contact
+        V = nodal_velocity(self.problem.parts, cb.part, cb.points, t)
+        v1 = tangential_components(V, cb.tangents)
+        v2 = tangential_components(V, cast(NDArray[np.float64], cb.tangents2))
+        speed = np.hypot(v1, v2)
+        still = speed <= self._velocity_roundoff
+        v = np.concatenate([np.where(still, 0.0, v1), np.where(still, 0.0, v2)])
+        unit = np.where(still, 0.0, 1.0 / np.where(still, 1.0, speed))
+        fric = np.concatenate([self.mu * -v1 * unit, self.mu * -v2 * unit])
+        return _Sliding(t, v, fric, self.kappa * np.where(still, 0.0, speed))
 
     @functools.cached_property
     def steady_sliding(self) -> bool:
@@ -270,10 +312,13 @@ class Discretization:
     @functools.cached_property
     def _velocity_roundoff(self) -> float:
         t = np.asarray(self.problem.time.t, dtype=np.float64)
+        cb = self.contact
         scale = max(
             (
                 float(np.abs(velocity_levels(pc.velocity, t)).max(initial=0.0))
-                for pc in self.problem.parts
+                if not pc.velocity.spatial
+                else _field_scale(pc, cb.points[cb.part == i], t)
+                for i, pc in enumerate(self.problem.parts)
             ),
             default=0.0,
         )
@@ -297,6 +342,13 @@ class Discretization:
     def alpha(self, t: float) -> NDArray[np.float64]:
         """``alpha(t) = kappa |v*_tau(t)|`` at the contact nodes (2.2 for any Gamma_C)."""
         return self._sliding(t).alpha
+
+    def wear_pressure(self, p_soft: NDArray[np.float64], p_rigid: NDArray[np.float64]) -> Any:
+        """The pressure of the wear rate (3.22): ``p_soft`` (the paper's; the rigid layer
+        does not wear), plus ``p_rigid`` at the nodes of ``wear_on = "total"``."""
+        if self.wear_total is None:
+            return p_soft
+        return p_soft + np.where(self.wear_total, p_rigid, 0.0)
 
     @property
     def force_parts(self) -> tuple[tuple[str, str], ...]:
@@ -326,13 +378,19 @@ class Discretization:
         """:meth:`resultants` of several levels: their layer forces in one pass, then
         the product of each level (the same numbers as level by level)."""
         op = self._resultant_map(solver)
-        m, w = self.contact.m, self.contact.weights
+        m, w, r = self.contact.m, self.contact.weights, self.system.rows
         P_soft = np.array([sol.p_soft for sol in solutions])
-        X = np.empty((len(steps), 2 * m))
-        np.add(P_soft, np.array([sol.p_rigid for sol in solutions]), out=X[:, :m])
+        P_rigid = np.array([sol.p_rigid for sol in solutions])
+        X = np.empty((len(steps), (1 + r) * m))
+        np.add(P_soft, P_rigid, out=X[:, :m])
         X[:, :m] *= w
-        np.multiply(np.array([st.fric for st in steps]), P_soft, out=X[:, m:])
-        X[:, m:] *= w
+        # the friction of the step problem: on p_soft, or on the whole pressure
+        Q = self.system.friction_pressure(P_soft.T, P_rigid.T).T
+        fric = np.array([st.fric for st in steps])
+        for k in range(r):
+            rows = slice((1 + k) * m, (2 + k) * m)
+            np.multiply(fric[:, k * m : (k + 1) * m], Q, out=X[:, rows])
+            X[:, rows] *= w
         out = []
         for j, step in enumerate(steps):
             # one product a level: its forces do not depend on the run it came in
@@ -370,13 +428,15 @@ class Discretization:
         if self._resultants is not None:
             return self._resultants
         cb, con, d = self.contact, self.constraints, self.dim
-        m, P = cb.m, len(cb.part_names)
-        # contact parts: rows (part, component), columns (normal force, tangential force)
-        A_c = np.zeros((P, d, 2, m))
+        m, P, r = cb.m, len(cb.part_names), self.system.rows
+        tangents = cb.friction_tangents.reshape(r, m, d)
+        # contact parts: rows (part, component), columns (normal force, friction rows)
+        A_c = np.zeros((P, d, 1 + r, m))
         for c in range(d):
             A_c[cb.part, c, 0, np.arange(m)] = -cb.normals[:, c]
-            A_c[cb.part, c, 1, np.arange(m)] = -cb.tangents[:, c]
-        A = A_c.reshape(P * d, 2 * m)
+            for k in range(r):
+                A_c[cb.part, c, 1 + k, np.arange(m)] = -tangents[k, :, c]
+        A = A_c.reshape(P * d, (1 + r) * m)
         op = _Resultants(A=A)
         if con.parts:
             s = self.system
@@ -486,7 +546,9 @@ class Discretization:
         import scipy.sparse.linalg as spla
 
         s = self.system
-        Mc = (s.N.T @ sp.diags(s.weights) @ s.N + s.Tau.T @ sp.diags(s.weights) @ s.Tau).tocsc()
+        Mc = (
+            s.N.T @ sp.diags(s.weights) @ s.N + s.Tau.T @ sp.diags(s.tile_rows(s.weights)) @ s.Tau
+        ).tocsc()
         try:
             vals = spla.eigsh(Mc, k=1, M=s.K.tocsc(), which="LA", return_eigenvectors=False)
             ratio = float(vals[0])  # max of ||v||^2_Gc / a_h(v, v) = c_0^2 / C_1
@@ -506,3 +568,15 @@ class Discretization:
             "mu_max": float(np.abs(self.mu).max(initial=0)),
             "ratio": value,
         }
+
+
+def _field_scale(pc: ContactPart, points: NDArray[np.float64], t: NDArray[np.float64]) -> float:
+    """The largest ``|v*|`` of a field at the points over the levels (in blocks of about a
+    million numbers)."""
+    block = max(1, 2**20 // max(3 * len(points), 1))
+    top = 0.0
+    with np.errstate(all="ignore"):
+        for a in range(0, len(t), block):
+            V = np.array([pc.velocity.at(points, float(x)) for x in t[a : a + block]])
+            top = max(top, float(np.abs(V).max(initial=0.0)))
+    return top

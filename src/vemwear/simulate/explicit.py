@@ -48,6 +48,15 @@ def overshoot(problem: Problem) -> tuple[float, int, float]:
             tau, k, lp = cb.tangents[sel], kappa[sel], L_p[sel]
             if not tau.size:
                 continue
+            if pc.velocity.spatial or cb.tangents2 is not None:
+                # a field or a v* that turns: |v*_tau| level by level, over the nodes
+                P, nu = cb.points[sel], cb.normals[sel]
+                for n in range(len(t) - 1):
+                    V = pc.velocity.at(P, float(t[n]))
+                    V_tau = V - np.sum(V * nu, axis=1)[:, None] * nu
+                    r_n = float((k * np.linalg.norm(V_tau, axis=1) * lp).max())
+                    rate[n] = max(rate[n], np.inf if np.isnan(r_n) else r_n)
+                continue
             block = max(1, 2**20 // len(tau))
             for a in range(0, len(t) - 1, block):
                 b = min(a + block, len(t) - 1)

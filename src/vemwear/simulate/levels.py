@@ -196,13 +196,20 @@ def run_levels(
     # levels on one piece of the step problem, certified together (solvers/pieces.py),
     # as long as the friction stays the same; each level has the same numbers as in
     # any other run, so a resumed run stays bitwise the same
-    runs = d.constant_load and getattr(step_solver, "predicts", False)
+    # (not with wear on the whole pressure: a run's wear update takes p_soft alone)
+    runs = d.constant_load and d.wear_total is None and getattr(step_solver, "predicts", False)
     predict: Any = step_solver.predict if runs else None
     # (step data, solution, w^{n+1} or None) of the predicted levels not yet handed on
     ahead: deque[tuple[StepData, StepSolution, Any]] = deque()
 
     def predicted(n_: int, w_: Any, guess_: StepSolution) -> None:
         first = d.step_data(n_, w_)
+        if (
+            d.system.rows > 1
+            and n_ + 1 < L
+            and not np.array_equal(d.friction(float(tgrid[n_ + 1])), first.fric)
+        ):
+            return  # a turning v*: the friction changes at the next level, no run to make
         ws = [w_]
 
         def advance(p_soft: Any) -> Any:
@@ -253,7 +260,11 @@ def run_levels(
                 callback(n, sol)
             w_next = w
             if n + 1 < L:  # wear update (3.22)
-                w_next = wear_next(n, w, sol.p_soft) if w_after is None else w_after
+                w_next = (
+                    wear_next(n, w, d.wear_pressure(sol.p_soft, sol.p_rigid))
+                    if w_after is None
+                    else w_after
+                )
                 if not np.isfinite(w_next).all():
                     raise _wear_overflow(problem, n, w_next)
             now = (n + 1, w_next, sol)

@@ -28,7 +28,9 @@ from ..contact import (
     check_law,
     contact_boundary,
     contact_boundary3d,
+    foundation_rows,
     nodal_values,
+    nodal_velocity,
     velocity_levels,
     velocity_line,
 )
@@ -66,8 +68,8 @@ class Problem(Generic[MeshT]):
         ``traction`` (Gamma_N) and ``contact`` (Gamma_C). On a :class:`Mesh3D` (k = 1,
         docs/method.md section 10) the boundary facets are faces, the loads, v* and the
         prescribed components have three components (the 2-vector defaults of f1, f2
-        and v* become (0, 0, 0), (0, 0, 0) and (1, 0, 0)), and v* must keep one line
-        (:func:`~vemwear.contact.velocity_line`).
+        and v* become (0, 0, 0), (0, 0, 0) and (1, 0, 0)); a v* that turns gets two
+        friction rows per node (:func:`~vemwear.contact.foundation_rows`).
     material : Material
         Lamé coefficients lam, eta.
     time : TimeGrid
@@ -79,8 +81,10 @@ class Problem(Generic[MeshT]):
     g, mu, kappa : NodalField
         Layer thickness (> 0), friction coefficient (>= 0), wear coefficient (>= 0)
         along Gamma_C.
-    v_star : FoundationVelocity or 2-vector
-        Velocity of the foundation; it may vanish at some times (no friction and no
+    v_star : FoundationVelocity, RotatingFoundation or 2-vector
+        Velocity of the foundation, of t or a field of the points and t
+        (``FoundationVelocity(f, spatial=True)``, a :class:`~vemwear.contact.
+        RotatingFoundation`); it may vanish at some times and places (no friction and no
         wear there).
     stabilization : str
         ``"paper"`` (weight 1, the paper's dofi-dofi), ``"eta"`` or ``"trace"``.
@@ -221,7 +225,7 @@ class Problem(Generic[MeshT]):
                 self, "v_star", FoundationVelocity(as3(v.spec, (1.0, 0.0), "v_star"))
             )
         for pc in self.parts:
-            if len(pc.velocity(float(self.time.t[0]))) != 3:
+            if not pc.velocity.spatial and len(pc.velocity(float(self.time.t[0]))) != 3:
                 raise ValueError(f"v_star of {pc.part!r} needs three components on a 3D mesh")
 
     @cached_property
@@ -262,19 +266,14 @@ class Problem(Generic[MeshT]):
         con = self.constraints
         if isinstance(self.mesh, Mesh3D):
             t = self.time.t
-            lines = np.array(
-                [
-                    velocity_line(velocity_levels(pc.velocity, t), f"v_star of {pc.part!r}")
-                    for pc in self.parts
-                ]
-            )
-            return contact_boundary3d(
+            cb = contact_boundary3d(
                 self.mesh,
                 tuple(pc.part for pc in self.parts),
                 con.fully_fixed_vertices,
                 space=cast(P1Space3D, self.space),
-                directions=lines,
+                directions=np.array([_line(pc, t) for pc in self.parts]),
             )
+            return foundation_rows(cb, self.parts, t)  # fields and turning v*
         return contact_boundary(
             self.mesh,
             tuple(pc.part for pc in self.parts),
@@ -366,6 +365,12 @@ class Problem(Generic[MeshT]):
                     "p": c.p.describe(),
                     **{k: desc(getattr(c, k)) for k in ("g", "mu", "kappa", "gap")},
                     "v_star": c.velocity.describe(),
+                    # the paper's law by default: earlier fingerprints stay valid
+                    **{
+                        k: getattr(c, k)
+                        for k in ("friction_on", "wear_on")
+                        if getattr(c, k) != "soft"
+                    },
                 }
                 for c in self.contacts
             ],
@@ -414,6 +419,13 @@ class Problem(Generic[MeshT]):
             "nodal": sha256_arrays(*(self.nodal[k] for k in ("g", "mu", "kappa", "gap"))),
             "v_star": sha256_arrays(
                 np.array([[pc.velocity(t[i]) for pc in self.parts] for i in sample])
+                if not any(pc.velocity.spatial for pc in self.parts)
+                else np.array(
+                    [
+                        nodal_velocity(self.parts, self.contact.part, self.contact.points, t[i])
+                        for i in sample
+                    ]
+                )
             ),
             "load": sha256_arrays(
                 self.external_load(float(t[0])), self.external_load(float(t[-1]))
@@ -424,6 +436,17 @@ class Problem(Generic[MeshT]):
                 self.constraints.values(float(t[-1])),
             ),
         }
+
+
+def _line(pc: ContactPart, t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The line of a part's v* of the time alone (the x axis for a field or a v* that
+    turns, whose friction rows :func:`~vemwear.contact.foundation_rows` sets)."""
+    if pc.velocity.spatial:
+        return np.array([1.0, 0.0, 0.0])
+    try:
+        return velocity_line(velocity_levels(pc.velocity, t), f"v_star of {pc.part!r}")
+    except ValueError:
+        return np.array([1.0, 0.0, 0.0])
 
 
 def _subset(cb: ContactBoundary, sel: NDArray[np.bool_]) -> ContactBoundary:

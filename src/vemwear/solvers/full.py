@@ -19,6 +19,7 @@ from .rigid import (
     anchored_factor,
     bordered_jacobian,
     cold_start,
+    layer_x,
     liftoff_error,
     rigid_modes,
     touching,
@@ -70,20 +71,43 @@ class FullNewton:
             y = N @ u
             p_soft, dp = s.p(y - step.w), s.p.derivative(y - step.w)
             active = p_rigid + s.c_ncp * (y - s.g) > 0
-            J = (
-                s.K
-                + N.T @ sp.diags(weights * dp) @ N
-                + Tau.T @ sp.diags(weights * step.fric * dp) @ N
-            )
+            if s.rows == 1:
+                J = (
+                    s.K
+                    + N.T @ sp.diags(weights * dp) @ N
+                    + Tau.T @ sp.diags(weights * step.fric * dp) @ N
+                )
+            else:  # each friction row of a node moves with the node's normal displacement
+                J = (
+                    s.K
+                    + N.T @ sp.diags(weights * dp) @ N
+                    + Tau.T @ sp.diags(s.friction_weights(step.fric, dp)) @ sp.vstack([N] * s.rows)
+                )
             # residual without the rigid-layer term: p_rigid_new enters the system directly
             r0 = s.K @ u - step.F + s.layer_forces(0.0, p_soft, step.fric)
             # under load control the unknowns are u on the kept dofs and the rigid
             # amplitudes a (u = P u_keep + R a, :mod:`.rigid`)
             Jb = J if rig is None else bordered_jacobian(J, rig)[0]
             if np.any(active):  # saddle point with the active constraints N_A u = g_A
-                NA = N[np.flatnonzero(active)]
+                A = np.flatnonzero(active)
+                NA = N[A]
+                G = NA.T @ sp.diags(weights[active])
+                if s.friction_total is not None:  # the friction of p_rigid at those nodes
+                    on = np.where(s.friction_total, 1.0, 0.0)
+                    rows = s.friction_weights(step.fric, on)
+                    E = sp.csr_matrix(
+                        (
+                            np.ones(s.rows * len(A)),
+                            (
+                                np.concatenate([A + k * s.m for k in range(s.rows)]),
+                                np.tile(np.arange(len(A)), s.rows),
+                            ),
+                        ),
+                        shape=(s.rows * s.m, len(A)),
+                    )
+                    G = G + Tau.T @ sp.diags(rows) @ E
                 NAb = NA if rig is None else bordered_jacobian(NA, rig)[0]
-                M = sp.bmat([[Jb, NA.T @ sp.diags(weights[active])], [NAb, None]], format="csc")
+                M = sp.bmat([[Jb, G], [NAb, None]], format="csc")
                 rhs = np.concatenate([-r0, s.g[active] - NA @ u])
             else:
                 M, rhs = sp.csc_matrix(Jb), -r0
@@ -92,7 +116,7 @@ class FullNewton:
             except ConvergenceError:
                 if rig is None or np.any(active) or np.any(dp):
                     raise
-                x = np.concatenate([weights * (p_soft + p_rigid), weights * step.fric * p_soft])
+                x = layer_x(s, step.fric, p_soft, p_rigid)
                 raise liftoff_error(
                     s, rig, step, x, rig.load(step.F), "semismooth Newton (full)"
                 ) from None
@@ -115,7 +139,7 @@ class FullNewton:
         if rig is not None and max(res.values()) > opt.tol:
             p_soft = s.p(N @ u - step.w)
             if not (np.any(p_soft) or np.any(p_rigid)):
-                x = np.concatenate([weights * p_soft, weights * step.fric * p_soft])
+                x = layer_x(s, step.fric, p_soft, p_rigid)
                 raise liftoff_error(s, rig, step, x, rig.load(step.F), "semismooth Newton (full)")
         check_converged(res, opt.tol, step, "semismooth Newton (full)", it)
         y = N @ u

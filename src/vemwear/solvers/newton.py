@@ -61,8 +61,9 @@ class NewtonOptions:
 class _ReducedMatrix:
     """The LU factors of the reduced Newton matrix for one active set and slope vector.
 
-    With ``M = C_NN W + C_NT W Fric`` the Newton system for the new iterate reads
-    ``(I + M D) y + C_NN W p_rigid = rhs`` with ``D = diag(p')``; on the active set
+    With ``M = C_NN W + C_NT W Fric`` (``A_fric``) the Newton system for the new iterate
+    reads ``(I + M D) y + C_NN W p_rigid = rhs`` with ``D = diag(p')`` (``M p_rigid`` at
+    the nodes whose friction acts on the whole pressure, ``total``); on the active set
     ``y = g``, on the inactive set ``p_rigid = 0``. The unknowns left, ``y`` on the
     inactive and ``p_rigid`` on the active nodes, share one index per node, so the
     matrix is ``M D`` with the active columns replaced by those of ``C_NN W`` and ones
@@ -70,13 +71,17 @@ class _ReducedMatrix:
     friction where slopes are nonzero) and kept while those stay the same.
     """
 
-    def __init__(self, A_norm, T_fric, active, dp, fric) -> None:
+    def __init__(self, A_fric, A_norm, active, dp, fric, total=None) -> None:
         self.active = active
         self.dp = dp
-        # the friction enters only through the columns with a nonzero slope
-        self.fric = fric if np.any(dp[~active]) else None
-        Mat = (A_norm + T_fric * fric[None, :]) * dp[None, :]
+        # the friction enters only through the columns with a nonzero slope, and with
+        # friction on the whole pressure through the active columns of those nodes
+        on_rigid = total is not None and bool(np.any(active & total))
+        self.fric = fric if np.any(dp[~active]) or on_rigid else None
+        Mat = A_fric * dp[None, :]
         Mat[:, active] = A_norm[:, active]
+        if on_rigid:  # d R / d p_rigid = C_NN W + C_NT W Fric at those nodes
+            Mat[:, active & total] = A_fric[:, active & total]
         inactive = np.flatnonzero(~active)
         Mat[inactive, inactive] += 1.0
         self.lu, self.piv, info = _getrf(Mat, overwrite_a=True)
@@ -146,7 +151,7 @@ class CondensedNewton:
             CN = self.factor.S_inv @ Nc.T
             self.C_NN = Nc @ CN
             self.C_NT = system.Tau[:, cols].toarray() @ CN
-            self.C_NT = np.ascontiguousarray(self.C_NT.T)  # N C Tau^T
+            self.C_NT = np.ascontiguousarray(self.C_NT.T)  # N C Tau^T, (m, r m)
         else:
             free = cd >= 0  # prescribed components of contact nodes are not unknowns
             if self.rigid is None:
@@ -162,13 +167,21 @@ class CondensedNewton:
                 C = full.reshape(m, k, m, k)
             nu, tau = system.normals, system.tangents
             self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
-            self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
+            if system.rows == 1:
+                self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
+            else:  # one block per friction row, from the same block C of K^{-1}
+                self.C_NT = np.hstack(
+                    [np.einsum("ai,aibj,bj->ab", nu, C, t) for t in tau.reshape(-1, m, k)]
+                )
         w = system.weights
+        r = system.rows
         self.A_norm = self.C_NN * w[None, :]
-        self.T_fric = self.C_NT * w[None, :]  # C_NT W: the friction term is T_fric Fric
+        # C_NT W: the friction term is T_fric Fric
+        self.T_fric = self.C_NT * system.tile_rows(w)[None, :]
         self.H = np.hstack([self.C_NN, self.C_NT])  # one product per iteration
-        self._x = np.zeros(2 * m)  # work arrays of the iteration, and views of their halves
+        self._x = np.zeros((1 + r) * m)  # work arrays of the iteration, and views of parts
         self._x_n, self._x_t = self._x[:m], self._x[m:]
+        self._x_rows = self._x_t.reshape(r, m)
         self._buf = np.zeros(2 * m)
         self._zeros = np.zeros(m)
         self._zeros.setflags(write=False)
@@ -222,10 +235,12 @@ class CondensedNewton:
         """``W (p_soft + p_rigid)`` and ``W Fric p_soft`` of several levels, (m, k) each:
         the weights of ``N^T`` and ``Tau^T`` in the layer forces (the ``x`` of the
         condensed equation, level by level)."""
-        w = self.system.weights[:, None]
-        P_soft = np.column_stack(p_softs)
-        P = w * (P_soft + np.column_stack(p_rigids))
-        Q = w * np.column_stack([st.fric for st in steps]) * P_soft
+        s = self.system
+        w = s.weights[:, None]
+        P_soft, P_rigid = np.column_stack(p_softs), np.column_stack(p_rigids)
+        P = w * (P_soft + P_rigid)
+        fric = np.column_stack([st.fric for st in steps])
+        Q = s.friction_weights(fric, s.friction_pressure(P_soft, P_rigid))
         return P, Q
 
     def stiffness_note(self, y: NDArray, step: StepData) -> str:
@@ -246,12 +261,31 @@ class CondensedNewton:
             "the rounding of N u into residuals"
         )
 
+    def friction_matrix(self, fric: NDArray) -> NDArray:
+        """``C_NN W + C_NT W Fric`` (m, m): how the pressure friction acts on moves the
+        normal displacements (the friction rows of a node summed)."""
+        if self.system.rows == 1:
+            return self.A_norm + self.T_fric * fric[None, :]
+        m = self.system.m
+        TF = self.T_fric * fric[None, :]
+        out = self.A_norm + TF[:, :m]
+        for k in range(1, self.system.rows):
+            out += TF[:, k * m : (k + 1) * m]
+        return out
+
     def reduced_matrix(self, active: NDArray, dp: NDArray, fric: NDArray) -> _ReducedMatrix:
         """The LU factors of the reduced Newton matrix of this active set, slopes and
         friction: the kept ones while they stay the same."""
         red = self._reduced
         if red is None or not red.matches(active, dp, fric):
-            red = self._reduced = _ReducedMatrix(self.A_norm, self.T_fric, active, dp, fric)
+            red = self._reduced = _ReducedMatrix(
+                self.friction_matrix(fric),
+                self.A_norm,
+                active,
+                dp,
+                fric,
+                self.system.friction_total,
+            )
         return red
 
     def recover_many(
@@ -396,8 +430,11 @@ class CondensedNewton:
             y, p_rigid = np.minimum(d, g), np.zeros(s.m)
         w, H, x, x_n, x_t, buf = s.weights, self.H, self._x, self._x_n, self._x_t, self._buf
         if self._wf[0] is not fric:  # the steps of a steady v* share one fric array
-            self._wf = (fric, w * fric)
+            self._wf = (fric, s.tile_rows(w) * fric)
         wf = self._wf[1]
+        total = s.friction_total
+        if s.rows > 1:  # friction rows (r, m) times the nodal pressure (m,)
+            wf, x_t = wf.reshape(s.rows, s.m), self._x_rows
         inv_g = self.inv_g_ref
         stop = 0.1 * opt.tol
         seen: set[bytes] = set()  # the pieces left (their active sets and slopes)
@@ -410,9 +447,12 @@ class CondensedNewton:
         while True:
             r = y - wear
             p_soft = law(r)
-            # R = y - d + C_NN W (p_soft + p_rigid) + C_NT W Fric p_soft
+            # R = y - d + C_NN W (p_soft + p_rigid) + C_NT W Fric q, q = p_soft (+ p_rigid
+            # where friction acts on the whole pressure)
             np.multiply(w, p_soft + p_rigid, out=x_n)
-            np.multiply(wf, p_soft, out=x_t)
+            np.multiply(
+                wf, p_soft if total is None else s.friction_pressure(p_soft, p_rigid), out=x_t
+            )
             R = H @ x
             R += y
             R -= d
@@ -445,7 +485,7 @@ class CondensedNewton:
                 # rhs -= J11 dy_A + C_NN W (-p_rigid_I)
                 t = dp * dy_A
                 np.multiply(w, t - dp_I, out=x_n)
-                np.multiply(wf, t, out=x_t)
+                np.multiply(wf, t if total is None else s.friction_pressure(t, -dp_I), out=x_t)
                 rhs -= dy_A
                 rhs -= H @ x
             sol = red.solve(rhs)

@@ -12,7 +12,10 @@ function of the wear,
 with ``M = (C_NN W + C_NT W Fric) D``, ``J`` the reduced Newton matrix of the piece
 (``M`` with the columns of A replaced by those of ``C_NN W``, ones added on the
 diagonal off A) and ``c0 = d - (C_NN W + C_NT W Fric) q - (I + M)[:, A] g_A``. This
-is the iterate that one Newton step from any point of the piece gives.
+is the iterate that one Newton step from any point of the piece gives. Where friction
+acts on the whole pressure (``friction_total``), the columns of A in J are those of
+``C_NN W + C_NT W Fric`` at such nodes (Newton's reduced matrix), and the map is the
+same; with two friction rows per node (a v* that turns in 3D) ``C_NT W Fric`` sums them.
 
 Wear grows slowly, so a level mostly lies on the piece that Newton sees from the level
 before (the active set of the previous solution and the segments of ``y^{n-1} - w^n``).
@@ -72,7 +75,7 @@ class Piece:
         self.active, self.slope, self.offset = active, slope, offset
         self.any_active = bool(active.any())
         self.red = newton.reduced_matrix(active, slope, fric)
-        AT = newton.A_norm + newton.T_fric * fric[None, :]  # C_NN W + C_NT W Fric
+        AT = newton.friction_matrix(fric)  # C_NN W + C_NT W Fric
         self.M = AT * slope[None, :]
         c0 = d - AT @ offset
         if self.any_active:
@@ -104,7 +107,8 @@ class PiecePredictor:
         # levels the next run tries: doubled after a whole run is accepted, back to
         # FIRST_RUN after a run cut short (a piece change costs the levels tried past it)
         self._run = FIRST_RUN
-        self._X = np.zeros((2 * newton.system.m, self.width), order="F")  # work block
+        s = newton.system  # work block: the x of Newton's products, (1 + r) m rows
+        self._X = np.zeros(((1 + s.rows) * s.m, self.width), order="F")
 
     def __call__(
         self,
@@ -226,7 +230,8 @@ class PiecePredictor:
         X = self._X  # the other columns' values do not enter these columns' products
         cols = slice(first, first + k)
         X[:m, cols] = (s.weights * (S + P)).T  # Newton's x: W (p_soft + p_rigid)
-        X[m:, cols] = ((s.weights * fric) * S).T  # and W Fric p_soft
+        Q = s.friction_pressure(S.T, P.T)  # and W Fric q, q = p_soft (+ p_rigid: total)
+        X[m:, cols] = s.friction_weights(np.broadcast_to(fric[:, None], (len(fric), k)), Q)
         R = (newton.H @ X)[:, cols].T
         R += Y
         R -= d

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from .backends import factorize, schur_factorize
 from .system import _TINY, ContactSystem, ConvergenceError, StepData
 
-__all__ = ["AnchoredFactor", "RigidModes", "choose_anchors", "rigid_modes"]
+__all__ = ["AnchoredFactor", "RigidModes", "choose_anchors", "layer_x", "rigid_modes"]
 
 
 def choose_anchors(R: NDArray[np.float64], exclude: NDArray[np.int64]) -> NDArray[np.int64]:
@@ -109,24 +109,40 @@ class RigidModes:
         return self._load[1], self._load[2]
 
     def bordered(
-        self, solver: Any, active: NDArray, dp: NDArray, fric: NDArray, wf: NDArray
+        self, solver: Any, active: NDArray, dp: NDArray, fric: NDArray
     ) -> tuple[Any, float]:
         """The LU factors of the bordered reduced matrix of a piece (None if singular)
-        and the scale of its force rows, kept while the piece and friction stay."""
+        and the scale of its force rows, kept while the piece and friction stay.
+
+        Its top-left block is the condensed Newton's reduced matrix (``A_fric D``, the
+        active columns ``C_NN W``, or ``A_fric`` where friction acts on the whole
+        pressure, ones on the inactive diagonal); the border is ``-N R`` and the rows of
+        the force balance along R, ``(N R)^T W + (Tau R)^T W Fric`` (each node's friction
+        rows summed) times the slope on the inactive columns, ``(N R)^T W`` (plus the
+        friction part where it acts on the whole pressure) on the active ones."""
         key = active.tobytes() + dp.tobytes() + fric.tobytes()
         if self._bordered is not None and self._bordered[0] == key:
             return self._bordered[1], self._bordered[2]
+        s = solver.system
         m, r = len(active), self.R.shape[1]
-        w = solver.system.weights
+        w = s.weights
+        total = s.friction_total
+        on_total = active & total if total is not None else np.zeros(m, dtype=bool)
         inactive = np.flatnonzero(~active)
+        A_fric = solver.friction_matrix(fric)
         B = np.zeros((m + r, m + r))
         Mat = B[:m, :m]
-        Mat[...] = (solver.A_norm + solver.T_fric * fric[None, :]) * dp[None, :]
+        Mat[...] = A_fric * dp[None, :]
         Mat[:, active] = solver.A_norm[:, active]
+        Mat[:, on_total] = A_fric[:, on_total]
         Mat[inactive, inactive] += 1.0
         B[:m, m:] = -self.NR
-        L = (self.NR.T * w + self.TR.T * wf) * dp
-        L[:, active] = self.NR.T[:, active] * w[active]
+        # the friction rows' weights summed per node: (r, m)
+        LT = (self.TR * (s.tile_rows(w) * fric)[:, None]).T.reshape(r, s.rows, m).sum(axis=1)
+        LN = self.NR.T * w
+        L = (LN + LT) * dp
+        L[:, active] = LN[:, active]
+        L[:, on_total] += LT[:, on_total]
         # the force rows on the scale of the displacement rows, for the pivoting
         sR = 1.0 / max(float(np.abs(L).max()), _TINY)
         B[m:, :m] = sR * L
@@ -226,6 +242,13 @@ def bordered_jacobian(
     return sp.hstack([J.tocsc()[:, rigid.keep], sp.csc_matrix(JR)], format="csc"), JR
 
 
+def layer_x(system: ContactSystem, fric: NDArray, p_soft: NDArray, p_rigid: NDArray) -> NDArray:
+    """The layer forces' weights ``[W (p_soft + p_rigid), W Fric q]`` (q the pressure
+    friction acts on): the ``x`` of the condensed equation and of the force balance."""
+    q = system.friction_pressure(p_soft, p_rigid)
+    return np.concatenate([system.weights * (p_soft + p_rigid), system.friction_weights(fric, q)])
+
+
 def cold_start(system: ContactSystem, wear: NDArray) -> tuple[NDArray, NDArray]:
     """Newton's start under load control, (y, p_rigid): every contact node halfway into
     the soft layer where the layer is stiff there; on the rigid layer, active with a
@@ -258,12 +281,11 @@ def newton_rigid(solver: Any, step: StepData, d: NDArray, start: tuple | None, i
     if start is not None and not _pressed(s, start[0], start[1], wear):
         start = None  # the previous level touched without force (a load ramped from 0)
     y, p_rigid = cold_start(s, wear) if start is None else start
-    wf = w * fric
     inv_g = solver.inv_g_ref
 
     def layer(y: NDArray, p_rigid: NDArray) -> tuple[NDArray, NDArray]:
         p_soft = law(y - wear)
-        return p_soft, np.concatenate([w * (p_soft + p_rigid), wf * p_soft])
+        return p_soft, layer_x(s, fric, p_soft, p_rigid)
 
     p_soft, x = layer(y, p_rigid)
     a = rig.amplitudes(y[:, None], d[:, None], (H @ x)[:, None])[:, 0]
@@ -291,11 +313,13 @@ def newton_rigid(solver: Any, step: StepData, d: NDArray, start: tuple | None, i
             return y, p_rigid, p_soft, it, errors
         if not np.any(active) and not np.any(dp):
             raise liftoff_error(s, rig, step, x, f_R, method)
-        lu, sR = rig.bordered(solver, active, dp, fric, wf)
+        lu, sR = rig.bordered(solver, active, dp, fric)
         dy_A = np.where(active, g - y, 0.0)
         dp_I = np.where(active, 0.0, p_rigid)
         t = dp * dy_A
-        xp = np.concatenate([w * (t - dp_I), wf * t])
+        xp = np.concatenate(
+            [w * (t - dp_I), s.friction_weights(fric, s.friction_pressure(t, -dp_I))]
+        )
         rhs = np.concatenate([-R1 - dy_A - H @ xp, -sR * (R2 + rig.H_R @ xp)])
         if lu is None:
             raise liftoff_error(s, rig, step, x, f_R, method)

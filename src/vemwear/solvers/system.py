@@ -2,13 +2,16 @@
 
 With ``w`` fixed, find ``u`` and ``p_rigid`` such that (docs/method.md, step problem)
 
-    K u - F + N^T(weights (p(N u - w) + p_rigid)) + Tau^T(weights fric p(N u - w)) = 0,
+    K u - F + N^T(weights (p(N u - w) + p_rigid)) + Tau^T(weights fric q) = 0,
     p_rigid >= 0,  N u <= g,  p_rigid (N u - g) = 0,
 
 where ``fric_a = mu_a (n*(t) . tau_a)``, ``p`` is the compliance law and ``weights``
 are the nodal weights omega_a. ``p_rigid`` and ``p_soft = p(N u - w)`` are the pressures
 (forces per unit length) of the rigid and the soft layer; the weights turn them into
-nodal forces (docs/method.md).
+nodal forces (docs/method.md). Friction acts on ``q = p_soft`` (the paper's law 2.8)
+or, at the nodes of ``friction_total``, on the whole pressure ``q = p_soft + p_rigid``
+(section 4b). ``Tau`` has one row per node, or two (``tau_1``, then ``tau_2``) where
+the foundation velocity turns in 3D; ``fric`` has one coefficient per row.
 """
 
 from __future__ import annotations
@@ -47,8 +50,10 @@ class ContactSystem:
     K : (nf, nf) sparse stiffness on the free dofs
     contact_dofs : (m, d) free-dof ids of the d components at each contact node
         (-1 for a prescribed component); None when ``trace`` is given
-    normals, tangents : (m, d) unit nu_a and tau_a (in 3D tau_a is the line of the
-        friction force, :mod:`vemwear.contact.boundary3d`)
+    normals : (m, d) unit nu_a
+    tangents : (r m, d) the unit directions of the friction rows: tau_a (r = 1; in 3D
+        the line of the friction force, :mod:`vemwear.contact.boundary3d`), or tau_1,a
+        then tau_2,a (r = 2, a foundation velocity that turns in 3D)
     weights : (m,) nodal weights
     g : (m,) thickness of the soft layer (bound on ``N u``)
     p : the compliance law
@@ -63,6 +68,9 @@ class ContactSystem:
         singular along them; None when the constraints hold the body.
     rigid_names, contact_names : the rigid motions in words and the contact parts, for
         messages
+    friction_total : (m,) bool, optional
+        The nodes where friction acts on the whole contact pressure ``p_soft +
+        p_rigid`` (``friction_on = "total"``); None: on ``p_soft`` everywhere.
     """
 
     K: sp.csr_matrix
@@ -77,6 +85,7 @@ class ContactSystem:
     rigid: NDArray[np.float64] | None = None
     rigid_names: tuple[str, ...] = ()
     contact_names: tuple[str, ...] = ()
+    friction_total: NDArray[np.bool_] | None = None
     N: sp.csr_matrix = field(init=False, repr=False)
     Tau: sp.csr_matrix = field(init=False, repr=False)
     c_ncp: NDArray[np.float64] = field(init=False, repr=False)
@@ -86,12 +95,13 @@ class ContactSystem:
             self._init_from_trace()
             return
         m, nf = len(self.weights), self.K.shape[0]
-        rows = np.repeat(np.arange(m), np.shape(self.contact_dofs)[1])
-        cols = np.asarray(self.contact_dofs).ravel()
-        free = cols >= 0  # prescribed components do not enter N and Tau
         for name, direction in (("N", self.normals), ("Tau", self.tangents)):
+            r = len(direction) // m  # friction rows per node
+            rows = np.repeat(np.arange(r * m), np.shape(self.contact_dofs)[1])
+            cols = np.tile(np.asarray(self.contact_dofs).ravel(), r)
+            free = cols >= 0  # prescribed components do not enter N and Tau
             vals = np.asarray(direction).ravel()
-            op = sp.csr_matrix((vals[free], (rows[free], cols[free])), shape=(m, nf))
+            op = sp.csr_matrix((vals[free], (rows[free], cols[free])), shape=(r * m, nf))
             object.__setattr__(self, name, op)
         # scale of the complementarity function p_rigid + c (N u - g): the normal stiffness
         # per unit length at each node, so both terms are pressures of comparable size
@@ -105,12 +115,15 @@ class ContactSystem:
         if self.trace is None:
             raise ValueError("ContactSystem: give contact_dofs or trace")
         T = sp.csr_matrix(self.trace)
-        k = np.shape(self.normals)[1]
-        for name, d in (("N", self.normals), ("Tau", self.tangents)):
-            op = sp.diags(np.asarray(d)[:, 0]) @ T[0::k] + sp.diags(np.asarray(d)[:, 1]) @ T[1::k]
-            for c in range(2, k):
-                op = op + sp.diags(np.asarray(d)[:, c]) @ T[c::k]
-            op = sp.csr_matrix(op)
+        k, m = np.shape(self.normals)[1], len(self.weights)
+        for name, dirs in (("N", self.normals), ("Tau", self.tangents)):
+            ops = []
+            for d in np.asarray(dirs).reshape(-1, m, k):  # each friction row
+                op = sp.diags(d[:, 0]) @ T[0::k] + sp.diags(d[:, 1]) @ T[1::k]
+                for c in range(2, k):
+                    op = op + sp.diags(d[:, c]) @ T[c::k]
+                ops.append(op)
+            op = sp.csr_matrix(ops[0] if len(ops) == 1 else sp.vstack(ops))
             op.eliminate_zeros()
             object.__setattr__(self, name, op)
         # as for nodal dofs: sum_j N_aj^2 K_jj, the normal stiffness at the node
@@ -120,6 +133,33 @@ class ContactSystem:
     @property
     def m(self) -> int:
         return len(self.weights)
+
+    @property
+    def rows(self) -> int:
+        """The friction rows per node r: 1, or 2 where v* turns in 3D."""
+        return len(self.tangents) // len(self.weights)
+
+    def friction_pressure(self, p_soft: NDArray, p_rigid: NDArray | float) -> NDArray:
+        """The pressure friction acts on, (m,) or (m, k): ``p_soft``, plus ``p_rigid`` at
+        the nodes of :attr:`friction_total` (``p_soft`` itself when there are none)."""
+        if self.friction_total is None:
+            return p_soft
+        total = self.friction_total if np.ndim(p_soft) == 1 else self.friction_total[:, None]
+        return p_soft + np.where(total, p_rigid, 0.0)
+
+    def friction_weights(self, fric: NDArray, q: NDArray) -> NDArray:
+        """``W Fric q``, the weights of ``Tau^T`` in the friction force: ``fric`` (r m,)
+        or (r m, k), ``q`` (m,) or (m, k) the pressure friction acts on."""
+        w = self.weights if np.ndim(fric) == 1 else self.weights[:, None]
+        if len(fric) == len(w):  # one row per node
+            return w * fric * q
+        F = np.reshape(fric, (-1, *np.shape(q)))
+        return np.reshape((w * F) * q, np.shape(fric))
+
+    def tile_rows(self, x: NDArray) -> NDArray:
+        """A nodal array (m,) or (m, k) repeated for the r friction rows."""
+        r = self.rows
+        return x if r == 1 else np.concatenate([x] * r)
 
     @cached_property
     def contact_cols(self) -> NDArray[np.int64]:
@@ -173,7 +213,7 @@ class ContactSystem:
             return np.full(dP.shape[1], self.K_norm)
         aNT, aTT, nu_sum, K_rows = self.abs_force_operators
         t = (self.weights * nu_sum)[:, None] * dP
-        rows = aNT @ t + aTT @ (np.abs(fric) * t)
+        rows = aNT @ t + aTT @ (np.abs(fric) * self.tile_rows(t))
         rows += K_rows[:, None]
         return np.maximum(rows.max(axis=0), self.K_norm)
 
@@ -183,9 +223,11 @@ class ContactSystem:
 
     def layer_forces(self, p_rigid: NDArray | float, p_soft: NDArray, fric: NDArray) -> NDArray:
         """Nodal forces of the rigid and the soft layer,
-        ``N^T(weights (p_soft + p_rigid)) + Tau^T(weights fric p_soft)``."""
+        ``N^T(weights (p_soft + p_rigid)) + Tau^T(weights fric q)``, q the pressure
+        friction acts on (:meth:`friction_pressure`)."""
+        q = self.friction_pressure(p_soft, p_rigid)
         return self.N.T @ (self.weights * (p_soft + p_rigid)) + self.Tau.T @ (
-            self.weights * fric * p_soft
+            self.friction_weights(fric, q)
         )
 
     def contact_force(self, u: NDArray, p_rigid: NDArray, fric: NDArray, w: NDArray):
@@ -323,7 +365,8 @@ def kkt_residuals_block(
     w = system.weights[:, None]
     # the contact forces live on the contact dofs: N^T a + Tau^T b restricted to them
     NT, TT = system.force_operators
-    force = NT @ (w * (P_soft + P_rigid)) + TT @ (w * fric * P_soft)
+    Q = system.friction_pressure(P_soft, P_rigid)
+    force = NT @ (w * (P_soft + P_rigid)) + TT @ system.friction_weights(fric, Q)
     # column maxima: the same numbers as level by level (max is exact); the load's
     # once per load vector (a constant load: one object)
     F_max: dict[int, float] = {}

@@ -5,7 +5,8 @@ constraint ``N u <= g``) and the pressure ``q`` of the soft layer (for the norma
 compliance term, which the iteration freezes). One iteration is one
 back-substitution with the factorization of K, then an update of both multipliers:
 
-    K u = F - N^T(weights (q + p_rigid)) - Tau^T(weights fric q)
+    K u = F - N^T(weights (q + p_rigid)) - Tau^T(weights fric q)   (q + p_rigid in the
+                                          friction term where it acts on the whole pressure)
     p_rigid <- max(0, p_rigid + rho_1 (N u - g))              (projected gradient ascent)
     q   <- q + rho_2 (p(N u - w) - q)                  (relaxed fixed point)
 
