@@ -219,3 +219,17 @@ def test_fretting_cylinder_runs_its_cycles_under_load_control(tmp_path: Path) ->
     assert np.all(np.diff(wear.max(axis=1)) > 0)
     with np.load(tmp_path / "out" / "result.npz") as z:
         assert np.abs(z["forces"][:, -1, 1] + 0.05).max() <= 1e-14
+
+
+def test_pin_on_disc_wears_faster_on_the_outer_side() -> None:
+    """The shipped pin on a turning disc, a few levels: the holder carries the dead load
+    and friction, the outer side (farther from the disc's axis) wears faster."""
+    cfg = _beyond("pin_on_disc", **{"time.steps": 8})
+    assert [r.part for r in cfg.problem.rigid] == ["holder"]
+    res = simulate(cfg.problem, cfg.solver, store="final")
+    assert res.residuals.max() <= cfg.solver.tol
+    assert np.abs(res.forces.sum(axis=1)).max() <= 1e-12 * 0.02
+    assert np.abs(res.forces[:, -1, 2] + 0.02 * np.minimum(res.t / 0.1, 1.0)).max() <= 1e-14
+    x = res.contact_points[:, 0]
+    w = res.wear[-1]
+    assert w[x > 0.2].mean() > 1.1 * w[x < -0.2].mean()

@@ -50,8 +50,17 @@ def contact_plane(result: Result) -> tuple[NDArray[np.float64], tuple[int, int]]
 
 
 def _triangulation(result: Result) -> tuple[Triangulation, tuple[int, int]]:
+    """The Delaunay triangulation of the contact nodes in their plane, without its
+    slivers: nodes on a circle (a pin's face) give triangles of zero area at the
+    boundary, which matplotlib's interpolators refuse."""
     xy, axes = contact_plane(result)
-    return Triangulation(xy[:, 0], xy[:, 1]), axes
+    tri = Triangulation(xy[:, 0], xy[:, 1])
+    a, b, c = (xy[tri.triangles[:, k]] for k in range(3))
+    area = 0.5 * np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
+    sliver = area <= 1e-9 * float(area.max(initial=0.0))
+    if np.any(sliver):
+        tri = Triangulation(xy[:, 0], xy[:, 1], tri.triangles[~sliver])
+    return tri, axes
 
 
 def _rows(result: Result, times: Sequence[float]) -> list[int]:
