@@ -17,6 +17,8 @@ import numpy as np
 from vemwear.mesh.boundary3d import select_parts3d
 from vemwear.mesh.generate3d import extrude
 from vemwear.mesh.io3d import write_mesh3d
+from vemwear.mesh.polyhedra import Mesh3D
+from vemwear.mesh.polymesh import Mesh
 from vemwear.mesh.voronoi import voronoi_mesh
 
 RADIUS, HEIGHT, CORNERS = 0.25, 0.5, 32
@@ -27,6 +29,7 @@ def pin_mesh(n_cells: int = 96, layers: int = 4) -> Mesh3D:
     angle = 2 * np.pi * np.arange(CORNERS) / CORNERS
     disc = RADIUS * np.column_stack([np.cos(angle), np.sin(angle)])
     section = voronoi_mesh(disc, n_cells, seed=0)
+    assert isinstance(section, Mesh)
     mesh = extrude(section, layers, HEIGHT, bottom="face", top="holder")
     return select_parts3d(mesh, {"face": "face", "holder": "holder", "side": "rest"})
 
