@@ -40,9 +40,22 @@ from .system import (
 )
 from .threads import solver_threads
 
-#: Newton steps in a row on one piece after which the condensed iteration stops
-#: (:meth:`CondensedNewton._iterate`).
+#: Newton steps in a row on one piece after which an iteration stops
+#: (:func:`at_rounding_floor`).
 _STALL = 4
+
+
+def at_rounding_floor(same: int, within_tol: bool) -> bool:
+    """Whether a semismooth Newton iteration stops at the rounding floor of its residual.
+
+    ``same`` counts the steps in a row taken on one piece (active set and slopes): the
+    iterate after the first such step solves the piece's linear system and a second one
+    refines it; past that only rounding changes. So an iterate within tol after two such
+    steps is final, and one above it after :data:`_STALL` steps will not get there (a
+    residual floor above the stopping threshold: a load that moves the body 1e5 times g,
+    or a very stiff layer). Both Newton solvers stop by this rule (docs/method.md).
+    """
+    return (same >= 2 and within_tol) or same >= _STALL
 
 
 @dataclass(frozen=True)
@@ -367,12 +380,7 @@ class CondensedNewton:
         inv_g = self.inv_g_ref
         stop = 0.1 * opt.tol
         seen: set[bytes] = set()  # the pieces left (their active sets and slopes)
-        # steps in a row on one piece (active set, slopes): the iterate after such a
-        # step solves the piece's linear system, and a second one refines it; past
-        # that only rounding changes, so an iterate within tol is final, and one above
-        # it after STALL steps will not get there (a residual floor above 0.1 tol: a
-        # load that moves the body 1e5 times g, or a very stiff layer)
-        last, same = None, 0
+        last, same = None, 0  # steps in a row on one piece: at_rounding_floor
         while True:
             r = y - wear
             p_soft = law(r)
@@ -391,7 +399,7 @@ class CondensedNewton:
             red = self.reduced_matrix(active, dp, fric)
             if red is last:
                 same += 1
-                if (same >= 2 and max(errors) <= opt.tol) or same >= _STALL:
+                if at_rounding_floor(same, max(errors) <= opt.tol):
                     return y, p_rigid, p_soft, it - 1, errors, False
             else:
                 same = 0
@@ -465,11 +473,22 @@ class FullNewton:
             u, p_rigid = np.zeros(s.n_free), np.zeros(s.m)
         N, Tau, weights = s.N, s.Tau, s.weights
         it = 0
+        last: tuple[NDArray, NDArray] | None = None
+        same = 0  # Newton steps in a row on one piece (active set, slopes)
         while it < opt.max_iter:
-            it += 1
             y = N @ u
             p_soft, dp = s.p(y - step.w), s.p.derivative(y - step.w)
             active = p_rigid + s.c_ncp * (y - s.g) > 0
+            if last is not None and np.array_equal(active, last[0]) and np.array_equal(dp, last[1]):
+                same += 1
+                if same >= 2:  # the residual of the iterate, only where it may stop
+                    res = kkt_residuals(s, step, u, np.maximum(p_rigid, 0.0))
+                    if at_rounding_floor(same, max(res.values()) <= opt.tol):
+                        break
+            else:
+                same = 0
+            last = (active, dp)
+            it += 1
             J = (
                 s.K
                 + N.T @ sp.diags(weights * dp) @ N
