@@ -43,7 +43,10 @@ from .checkpoint import CHECKPOINT_NAME, differences, read_checkpoint, write_che
 from .outdir import (
     LOCK_NAME,
     MARKER_NAME,
+    PARTIAL_NAME,
     OutputDirError,
+    completed_leftovers,
+    killed_before_checkpoint,
     output_lock,
     prepare_output_dir,
     read_marker,
@@ -60,6 +63,7 @@ if TYPE_CHECKING:
 __all__ = [
     "PARTIAL_NAME",
     "ResumeError",
+    "RunComplete",
     "RunPlan",
     "abandon_run",
     "execute_run",
@@ -68,12 +72,26 @@ __all__ = [
     "storage_plan",
 ]
 
-#: Explanation written into the output directory of an unfinished run.
-PARTIAL_NAME = "PARTIAL.txt"
-
 
 class ResumeError(OutputDirError):
     """``--resume`` is not possible (no checkpoint, other inputs, damaged files)."""
+
+
+class RunComplete(Exception):
+    """``--resume`` of a run that is complete: nothing to do (the message says so)."""
+
+
+def output_names() -> list[str]:
+    """Every top-level name a run may write into its output directory (a user's file of
+    one of these names is never overwritten: ``--force`` refuses)."""
+    from ..post.outputs import FIGURE_NAMES, FIGURE_NAMES_3D
+    from ..post.results import NPZ_NAME, SUMMARY_NAME
+    from ..post.stream import STREAM_NAME
+
+    series = ["solution.xdmf", "solution.h5", "solution.pvd", "solution"]
+    figures = [*FIGURE_NAMES.values(), *FIGURE_NAMES_3D.values()]
+    names = {STREAM_NAME, CHECKPOINT_NAME, PARTIAL_NAME, SUMMARY_NAME, NPZ_NAME}
+    return sorted({*names, *figures, *series})
 
 
 def storage_plan(cfg: Config) -> StoragePlan:
@@ -114,6 +132,8 @@ class RunPlan:
         Holds the lock of the output directory (:func:`hold_lock`) until it is closed.
     locked : bool
         Whether ``lock`` holds it.
+    note : str
+        A line to show before the run (e.g. a resume that starts from level 0).
     """
 
     cfg: Config
@@ -128,6 +148,7 @@ class RunPlan:
     created: bool = False
     lock: ExitStack = field(default_factory=ExitStack)
     locked: bool = False
+    note: str = ""
 
 
 def hold_lock(plan: RunPlan) -> None:
@@ -206,19 +227,36 @@ def prepare_run(
         command=_resume_command(config_path, outdir, solver_flag),
     )
     refuse_locked(outdir)
+    marker = read_marker(outdir) if outdir.is_dir() else None
+    if resume and marker is not None and marker.get("state") == "complete":
+        for p in completed_leftovers(outdir):  # a run killed just after it completed
+            p.unlink(missing_ok=True)
+        raise RunComplete(f"{outdir} holds a complete run; there is nothing to resume")
+    if resume and killed_before_checkpoint(outdir):
+        resume = False  # killed before its first checkpoint: nothing to go on from
+        plan.note = f"{outdir}: the stopped run saved no level; starting from level 0"
     if resume:  # a refused resume leaves the directory as it was, lock file included
         plan.state, plan.previous_solver = _load_checkpoint(outdir, meta)
         hold_lock(plan)
         return plan
-    marker = read_marker(outdir) if outdir.is_dir() else None
-    if marker is not None and marker.get("state") in ("partial", "running") and not force:
+    if (
+        marker is not None
+        and marker.get("state") in ("partial", "running")
+        and not force
+        and not killed_before_checkpoint(outdir)
+    ):
         raise ResumeError(
             f"{outdir} holds a stopped run ({marker.get('state')}); continue it with --resume, "
             "or start over with --force"
         )
     plan.created = not outdir.exists()
     prepare_output_dir(
-        outdir, force=force, protect=[config_path], need_bytes=need_bytes, command="run"
+        outdir,
+        force=force,
+        protect=[config_path],
+        need_bytes=need_bytes,
+        command="run",
+        reserved=output_names(),
     )
     hold_lock(plan)  # before any assembly: a second run is refused at once
     return plan
@@ -280,7 +318,8 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
     out, cfg = plan.out, plan.cfg
     hold_lock(plan)
     with plan.lock:
-        write_marker(out, "running", [STREAM_NAME, CHECKPOINT_NAME], command="run")
+        # every name the run may write: a kill in its last writes leaves only listed files
+        write_marker(out, "running", output_names(), command="run")
         meta = {**plan.meta, "written": ""}
 
         def on_checkpoint(state: LoopState) -> None:
@@ -416,9 +455,7 @@ It refuses to start if the physics, the discretization or the kept levels change
 {CHECKPOINT_NAME} the state to go on from.
 """
     write_atomic(plan.out / PARTIAL_NAME, text)
-    write_marker(
-        plan.out, "partial", [STREAM_NAME, CHECKPOINT_NAME, SUMMARY_NAME, PARTIAL_NAME], "run"
-    )
+    write_marker(plan.out, "partial", output_names(), "run")
 
 
 def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
@@ -435,9 +472,9 @@ def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
     cfg, out = plan.cfg, plan.out
     need, avail = stream_bytes(out / STREAM_NAME), available_memory()
     if avail and 3 * need > avail:
-        for name in (CHECKPOINT_NAME, PARTIAL_NAME):
-            (out / name).unlink(missing_ok=True)
         write_marker(out, "complete", [STREAM_NAME], command="run")
+        for name in (CHECKPOINT_NAME, PARTIAL_NAME):  # after the marker: see completed_leftovers
+            (out / name).unlink(missing_ok=True)
         return (
             f"the kept arrays take {need / 1e9:.2f} GB, too much for the "
             f"{avail / 1e9:.2f} GB of memory available: {out / STREAM_NAME} holds the whole "
@@ -464,8 +501,8 @@ def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
         extra=extra,
         **({"paraview": cfg.output.paraview} if hasattr(cfg.output, "paraview") else {}),
     )
-    for name in (CHECKPOINT_NAME, PARTIAL_NAME):
-        (out / name).unlink(missing_ok=True)
     files = [STREAM_NAME, *(f.split("/")[0] for names in written.values() for f in names)]
     write_marker(out, "complete", sorted(set(files)), command="run")
+    for name in (CHECKPOINT_NAME, PARTIAL_NAME):  # after the marker: see completed_leftovers
+        (out / name).unlink(missing_ok=True)
     return result
