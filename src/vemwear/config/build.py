@@ -340,9 +340,12 @@ def load_config(
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"{path}: config file not found")
+    from ..util.text import NotUtf8Error, read_utf8
+
     try:
-        with path.open("rb") as fh:
-            data = tomllib.load(fh)
+        data = tomllib.loads(read_utf8(path))
+    except NotUtf8Error as exc:
+        raise ConfigError(f"{path}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from exc
     except OSError as exc:

@@ -337,6 +337,7 @@ def load_study(
         For an invalid study, or the first invalid run (its parameters and key path).
     """
     from ..config import apply_overrides, parse_config
+    from ..util.text import NotUtf8Error, read_utf8
 
     if isinstance(study, Mapping):
         path, src, raw = None, "study", dict(study)
@@ -346,8 +347,10 @@ def load_study(
         path = Path(study)
         src = str(path)
         try:
-            text = path.read_text(encoding="utf-8")
+            text = read_utf8(path)
             raw = tomllib.loads(text)
+        except NotUtf8Error as exc:
+            raise StudyError(f"{src}: {exc}") from None
         except OSError as exc:
             raise StudyError(f"{src}: cannot read the study file: {exc.strerror or exc}") from None
         except tomllib.TOMLDecodeError as exc:
@@ -364,8 +367,10 @@ def load_study(
     base_path = Path(raw["base"]).expanduser()
     base_path = base_path if base_path.is_absolute() else here / base_path
     try:
-        base_text = base_path.read_text(encoding="utf-8")
+        base_text = read_utf8(base_path)
         base = tomllib.loads(base_text)
+    except NotUtf8Error as exc:
+        raise StudyError(f"{src}: base {base_path}: {exc}") from None
     except OSError as exc:
         raise StudyError(f"{src}: base {raw['base']!r}: cannot read {base_path}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:

@@ -23,6 +23,7 @@ is ``s^2 (J^T J)^-1`` with ``s^2 = |r|^2 / (n - p)``, and the 95 % intervals are
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
@@ -86,10 +87,13 @@ def read_measured(path: str | os.PathLike[str]) -> Measured:
     StudyError
         Naming the file, the line and the problem.
     """
+    from ..util.text import NotUtf8Error, read_utf8
+
     src = str(path)
     try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            rows = list(csv.reader(fh))
+        rows = list(csv.reader(io.StringIO(read_utf8(path), newline="")))
+    except NotUtf8Error as exc:
+        raise StudyError(f"{src}: {exc}") from None
     except OSError as exc:
         raise StudyError(f"{src}: cannot read the data: {exc.strerror or exc}") from None
     rows = [r for r in rows if r and not r[0].lstrip().startswith("#")]
@@ -370,9 +374,11 @@ def fit(
     unknown = [p for p in names if p not in PARAMETERS]
     if unknown or not names:
         raise StudyError(f"--params {unknown or list(params)}: choose from {', '.join(PARAMETERS)}")
+    from ..util.text import read_utf8
+
     try:
-        base = tomllib.loads(Path(config).read_text(encoding="utf-8"))
-    except (OSError, tomllib.TOMLDecodeError) as exc:
+        base = tomllib.loads(read_utf8(config))
+    except (OSError, ValueError) as exc:
         raise StudyError(f"{src}: cannot read the configuration: {exc}") from None
     from ..config import apply_overrides
     from .design import _absolute_mesh
