@@ -59,3 +59,65 @@ def test_a_config_that_is_not_utf8_is_exit_2_with_the_byte_offset(
     # a UTF-8 byte-order mark is fine
     good.write_bytes(b"\xef\xbb\xbf" + good.read_bytes())
     assert main(["check", str(good)]) == 0
+
+
+# ---------------------------------------------------------------------------- scales
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        (
+            "size = [2.0, 1.0]",
+            "size = [2e-300, 1e-300]",
+            "[mesh] the body measures 2e-300 across: too small or too large to compute with",
+        ),
+        (
+            "size = [2.0, 1.0]",
+            "size = [2e300, 1e300]",
+            "[mesh] the body measures 2e+300 across: too small or too large to compute with",
+        ),
+        ("g = 0.1", "g = 1e308", "[contact] g = 1e+308 is too large to compute with"),
+    ],
+    ids=["tiny body", "huge body", "huge g"],
+)
+def test_a_scale_out_of_floating_point_range_is_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], old: str, new: str, message: str
+) -> None:
+    """Before: the tiny body blamed ``[material] lam = 4, eta = 4`` and the huge g the
+    compliance law ``p(r)``."""
+    cfg = tmp_path / "case.toml"
+    cfg.write_text(small_config("scale", output=OFF).replace(old, new))
+    assert main(["check", str(cfg)]) == 2
+    err = _err(capsys)
+    assert err.startswith(f"vemwear: error: {cfg}: {message}"), err
+    assert "[material]" not in err and "must return finite values" not in err
+
+
+# ---------------------------------------------------------------------------- worn through
+@pytest.mark.parametrize("key", ["kappa", "T"])
+def test_wear_beyond_the_layer_thickness_stops_the_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], key: str
+) -> None:
+    """kappa = 1e308 (or T = 1e308) exited 0 with a wear of 5.5e304 on a layer 0.1 thick."""
+    text = small_config("worn", output=OFF)
+    text = (
+        text.replace("kappa = 2.0", "kappa = 1e308")
+        if key == "kappa"
+        else (text.replace("T = 1.0", "T = 1e308"))
+    )
+    cfg = tmp_path / "case.toml"
+    cfg.write_text(text)
+    out = tmp_path / "out"
+    assert main(["run", str(cfg), "-o", str(out), "--no-progress"]) == 3
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith("vemwear: warning: the explicit wear update can overshoot")
+    assert err[1].startswith(
+        "vemwear: error: the wear exceeds the layer thickness at time level 1 (t = "
+    ), err
+    assert "> g = 0.1 at contact node" in err[1] and "worn through" in err[1]
+    assert "--resume" not in err[1] and len(err) == 2
+    import json
+
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["partial"] is True and summary["completed"] == 1
+    assert "exceeds the layer thickness" in summary["reason"]
+    assert not (out / "result.npz").exists()  # no final output of a meaningless run

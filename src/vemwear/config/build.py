@@ -38,7 +38,7 @@ from ..simulate.cycles import CycleJump
 from ..solvers import resolve_backend
 from ..vem import Material
 from . import schema as s
-from .checks import check_dims, check_loads, check_velocity
+from .checks import check_dims, check_loads, check_scales, check_velocity
 from .errors import ConfigError, at, from_library, from_validation
 from .fields import FieldExpression, VelocityExpression, library_data
 from .mesh_forms import MeshFile, mesh_family
@@ -417,6 +417,7 @@ def parse_config(
 
     mesh, mesh_source = _mesh(src, c.mesh, raw["mesh"], Path(base_dir))
     check_dims(src, c, raw, 3 if isinstance(mesh, Mesh3D) else 2)
+    check_scales(src, mesh, c)
     if parts.selectors:
         with at(src, "[boundary]", raw.get("boundary", {})):
             if isinstance(mesh, Mesh3D):

@@ -36,6 +36,8 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from ..post.outputs import write_outputs
 from ..util.atomic import write_atomic
 from ..util.hashing import sha256_file, sha256_json
@@ -65,6 +67,7 @@ __all__ = [
     "ResumeError",
     "RunComplete",
     "RunPlan",
+    "WornThroughError",
     "abandon_run",
     "execute_run",
     "hold_lock",
@@ -92,6 +95,54 @@ def output_names() -> list[str]:
     figures = [*FIGURE_NAMES.values(), *FIGURE_NAMES_3D.values()]
     names = {STREAM_NAME, CHECKPOINT_NAME, PARTIAL_NAME, SUMMARY_NAME, NPZ_NAME}
     return sorted({*names, *figures, *series})
+
+
+class WornThroughError(ValueError):
+    """The wear exceeds the thickness g of the soft layer: the run stops there."""
+
+
+class _WearGuard:
+    """A level sink that stops the run at the first level whose wear exceeds g.
+
+    In the model the wear stays below the penetration ``u_nu <= g``: once ``w`` reaches
+    ``u_nu`` the soft layer carries no pressure there and wears no more. Wear beyond g is
+    the explicit rule (3.22) overshooting (``k kappa |v*| L_p >= 1``), and every level
+    after it is meaningless (``kappa = 1e308`` gave a wear of 5.5e304 on a layer 0.1
+    thick); so the run stops with the finished levels saved, and says why.
+    """
+
+    def __init__(self, sink: Any, problem: Any) -> None:
+        self._sink, self._problem = sink, problem
+        self._g = problem.nodal["g"]
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._sink, name)
+
+    def level(self, n: int, w: Any, solution: Any) -> None:
+        if np.any(w > self._g):
+            raise _worn_through(self._problem, n, w, self._g)
+        self._sink.level(n, w, solution)
+
+
+def _worn_through(problem: Any, n: int, w: Any, g: Any) -> WornThroughError:
+    from ..simulate.explicit import overshoot
+
+    a = int(np.argmax(w - g))
+    x = ", ".join(f"{c:.4g}" for c in problem.contact.points[a])
+    t = problem.time.t
+    value, _, safe = overshoot(problem)
+    why = (
+        f"the explicit wear step overshoots (k kappa |v*| L_p up to {value:.3g}); use time "
+        f"steps below {safe:.3g} or a smaller kappa"
+        if value >= 1.0 and safe > 0
+        else "check the scale of [contact] kappa, v_star and the compliance law"
+    )
+    return WornThroughError(
+        f"the wear exceeds the layer thickness at time level {n} (t = {t[n]:g}): w = "
+        f"{w[a]:.6g} > g = {float(np.broadcast_to(g, w.shape)[a]):g} at contact node {a} "
+        f"(x = ({x})); the soft layer is worn through and the levels from here on would "
+        f"not be physical: {why}"
+    )
 
 
 def storage_plan(cfg: Config) -> StoragePlan:
@@ -294,7 +345,7 @@ def _reason(exc: BaseException) -> str:
     by_signal = stop_reason(exc)
     if by_signal is not None:
         return by_signal
-    if isinstance(exc, WearOverflowError):
+    if isinstance(exc, WearOverflowError | WornThroughError):
         return str(exc)
     if isinstance(exc, ConvergenceError):
         return f"the solver did not converge: {exc}"
@@ -326,13 +377,14 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
             meta["written"] = datetime.now(UTC).isoformat(timespec="seconds")
             write_checkpoint(out, state, meta)
 
-        sink = H5Sink(
+        h5 = H5Sink(
             out / STREAM_NAME,
             cfg.problem,
             plan.storage,
             resume=plan.state is not None,
             on_checkpoint=on_checkpoint,
         )
+        sink = _WearGuard(h5, cfg.problem)
         timings: dict[str, float] = {}
         try:
             final = run_levels(
@@ -382,10 +434,9 @@ def _stop(plan: RunPlan, sink: Any, exc: BaseException) -> None:
             sink.checkpoint(state)
             sink.close()
             _write_partial(plan, c, _reason(exc))
-        note = (
-            f"; the {c} finished time levels (of {L}) are saved in {plan.out}; "
-            f"continue with: {plan.command}"
-        )
+        note = f"; the {c} finished time levels (of {L}) are saved in {plan.out}"
+        if not isinstance(exc, WornThroughError):  # the same data would stop there again
+            note += f"; continue with: {plan.command}"
     except BaseException as err:  # a second failure must not hide the first one
         note = f"; the {c} finished time levels could not be saved ({type(err).__name__}: {err})"
     try:
