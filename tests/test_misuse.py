@@ -121,3 +121,37 @@ def test_wear_beyond_the_layer_thickness_stops_the_run(
     assert summary["partial"] is True and summary["completed"] == 1
     assert "exceeds the layer thickness" in summary["reason"]
     assert not (out / "result.npz").exists()  # no final output of a meaningless run
+
+
+# ---------------------------------------------------------------------------- studies
+EXAMPLE_BASE = Path(__file__).resolve().parents[1] / "src/vemwear/examples/example_5_2_set1.toml"
+
+
+def test_a_study_of_too_many_runs_is_refused_before_any_is_built(tmp_path: Path) -> None:
+    """A 100 x 100 x 100 grid printed nothing for 11 minutes while every run's
+    configuration was built (2.5 ms a run); the runs are counted first."""
+    import subprocess
+    import sys
+    import time
+
+    study = tmp_path / "big.toml"
+    study.write_text(
+        f'title = "big"\nbase = "{EXAMPLE_BASE}"\n[axes]\n'
+        '"contact.kappa" = { start = 1.0, stop = 100.0, num = 100 }\n'
+        '"contact.mu" = { start = 0.0, stop = 1.0, num = 100 }\n'
+        '"contact.g" = { start = 0.05, stop = 0.15, num = 100 }\n'
+    )
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "vemwear", "sweep", str(study), "-o", str(out)]
+    t0 = time.perf_counter()
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    took = time.perf_counter() - t0
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == (
+        f"vemwear: error: {study}: the design has 1000000 runs (100 x 100 x 100), more than "
+        "--max-runs = 100000; use fewer values per axis, or raise --max-runs\n"
+    )
+    assert took < 2.0, took
+    assert not out.exists()
+    done = subprocess.run([*cmd, "--max-runs", "9999"], capture_output=True, text=True)
+    assert done.returncode == 2 and "more than --max-runs = 9999" in done.stderr
