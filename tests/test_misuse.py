@@ -155,3 +155,50 @@ def test_a_study_of_too_many_runs_is_refused_before_any_is_built(tmp_path: Path)
     assert not out.exists()
     done = subprocess.run([*cmd, "--max-runs", "9999"], capture_output=True, text=True)
     assert done.returncode == 2 and "more than --max-runs = 9999" in done.stderr
+
+
+# ---------------------------------------------------------------------------- fit
+@pytest.mark.parametrize(
+    ("rows", "message"),
+    [
+        (
+            ["5.5,1.0,0.01", "1.0,1.0,0.02"],
+            "data point 1 at x = 5.5 is off the contact part: its contact nodes, where the "
+            "model's wear is known, span x = 0.25 .. 2",
+        ),
+        (["1.0,1.0,0.01", "-0.5,1.0,0.02"], "data point 2 at x = -0.5 is off the contact part"),
+        (["1.0,3.0,0.01", "1.5,1.0,0.02"], "t = 3 is outside the configuration's time grid [0, 1]"),
+        (
+            ["1.0,1.0,0.01"],
+            "1 data points for 1 parameters; a fit needs more points than parameters",
+        ),
+    ],
+    ids=["right of the part", "left of the part", "after T", "n = p"],
+)
+def test_fit_refuses_data_it_cannot_fit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], rows: list[str], message: str
+) -> None:
+    """np.interp clamped x = 5.5 on a part spanning 0 .. 2 to the end value; n = p gave
+    a zero-width interval."""
+    cfg = tmp_path / "case.toml"
+    cfg.write_text(small_config("fit", output=OFF))
+    csv = tmp_path / "data.csv"
+    csv.write_text("x,t,w\n" + "\n".join(rows) + "\n")
+    out = tmp_path / "out"
+    assert main(["fit", str(cfg), "--data", str(csv), "-o", str(out)]) == 2
+    err = _err(capsys)
+    assert message in err, err
+    assert not out.exists()  # refused before any run
+
+
+def test_fit_intervals_stay_within_the_bounds() -> None:
+    """A linear interval mu +- t se reached mu = -0.68 for an estimate of 0.04."""
+    from vemwear.studies.fitting import interval95
+
+    lo, hi = interval95(0.04, 0.3, 2.0, 0.0, float("inf"))
+    assert 0.0 < lo < 0.04 < hi
+    assert lo * hi == pytest.approx(0.04**2)  # symmetric in log mu
+    lo, hi = interval95(2.5, 0.01, 2.0, 0.0, float("inf"))  # a small error: about +- t se
+    assert lo == pytest.approx(2.48, abs=1e-4) and hi == pytest.approx(2.52, abs=1e-4)
+    assert interval95(0.0, 0.1, 2.0, 0.0, 1.0) == (0.0, pytest.approx(0.2))  # at a bound
+    assert interval95(0.9, 0.5, 2.0, 0.0, 1.0)[1] == 1.0  # clipped to the upper bound

@@ -312,6 +312,32 @@ def _check_data(m: Measured, data: Mapping[str, Any], src: str) -> None:
         )
     if m.w.size <= 0:
         raise StudyError(f"{m.source}: no data")
+    cb = cfg.problem.contact
+    a = np.asarray(cb.points[:, 0] if m.abscissa == "x" else cb.s, dtype=np.float64)
+    lo, hi = float(a.min()), float(a.max())
+    tol = 1e-9 * max(hi - lo, 1.0)
+    off = (m.a < lo - tol) | (m.a > hi + tol)
+    if np.any(off):  # np.interp would clamp it to the end value
+        i = int(np.flatnonzero(off)[0])
+        raise StudyError(
+            f"{m.source}: data point {i + 1} at {m.abscissa} = {m.a[i]:g} is off the contact "
+            f"part: its contact nodes, where the model's wear is known, span {m.abscissa} = "
+            f"{lo:g} .. {hi:g}"
+        )
+
+
+def interval95(
+    value: float, stderr: float, q: float, low: float, high: float
+) -> tuple[float, float]:
+    """The 95 % interval of a positive parameter: by the delta method in its logarithm
+    (``value * exp(+-q stderr / value)``, so never below 0: a linear interval of mu
+    reached -0.68), clipped to the bounds ``[low, high]``."""
+    if value > 0 and math.isfinite(stderr):
+        f = math.exp(min(q * stderr / value, 700.0))
+        a, b = value / f, value * f
+    else:  # at the lower bound 0
+        a, b = value - q * stderr, value + q * stderr
+    return max(a, low), min(b, high)
 
 
 def fit(
@@ -398,8 +424,11 @@ def fit(
     if errors not in ("relative", "absolute"):
         raise StudyError(f"errors must be 'relative' or 'absolute', got {errors!r}")
     weight = 1.0 / m.scale(errors)
-    if m.w.size < len(names):
-        raise StudyError(f"{m.source}: {m.w.size} data points for {len(names)} parameters")
+    if m.w.size <= len(names):  # no residual variance: a zero-width interval
+        raise StudyError(
+            f"{m.source}: {m.w.size} data points for {len(names)} parameters; a fit needs more "
+            "points than parameters (for the residual variance and the intervals)"
+        )
     tmp = None if out is not None else Path(tempfile.mkdtemp(prefix="vemwear-fit-"))
     target = Path(out) if out is not None else Path(str(tmp)) / "fit"
     outdir = open_study_dir(target, "fit", [config])
@@ -452,8 +481,8 @@ def fit(
             initial={k: float(v) for k, v in zip(names, x0, strict=True)},
             stderr={k: float(v) for k, v in zip(names, se, strict=True)},
             interval={
-                k: (float(v - q * e), float(v + q * e))
-                for k, v, e in zip(names, sol.x, se, strict=True)
+                k: interval95(float(v), float(e), q, float(a), float(b))
+                for k, v, e, a, b in zip(names, sol.x, se, lo, hi, strict=True)
             },
             residuals=final - m.w,
             fitted=final,
