@@ -202,3 +202,31 @@ def test_fit_intervals_stay_within_the_bounds() -> None:
     assert lo == pytest.approx(2.48, abs=1e-4) and hi == pytest.approx(2.52, abs=1e-4)
     assert interval95(0.0, 0.1, 2.0, 0.0, 1.0) == (0.0, pytest.approx(0.2))  # at a bound
     assert interval95(0.9, 0.5, 2.0, 0.0, 1.0)[1] == 1.0  # clipped to the upper bound
+
+
+# ---------------------------------------------------------------------------- many steps
+def test_output_times_of_many_levels_take_no_levels_sized_temporaries() -> None:
+    """steps = 2e7 took 10 s and 640 MB in the (times, levels) array of the default
+    output times before the plan could refuse it; the nearest levels are by bisection,
+    with the same indices as the argmin over the levels."""
+    import tracemalloc
+
+    import numpy as np
+
+    from vemwear.simulate import TimeGrid
+
+    rng = np.random.default_rng(1)
+    for _ in range(100):
+        t = np.concatenate([[0.0], np.cumsum(rng.random(rng.integers(1, 40)))])
+        grid = TimeGrid(t)
+        x = np.concatenate([rng.uniform(-0.1, 1.1, 20) * t[-1], t, (t[:-1] + t[1:]) / 2])
+        assert np.array_equal(grid.nearest(x), np.abs(t[None, :] - x[:, None]).argmin(axis=1))
+    big = TimeGrid.uniform(1.0, 20_000_000)
+    tracemalloc.start()
+    try:
+        idx = big.index([0.25, 0.5, 0.75, 1.0])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert idx.tolist() == [5_000_000, 10_000_000, 15_000_000, 20_000_000]
+    assert peak < 1e6, peak

@@ -208,7 +208,7 @@ def _time(src: str, t: Any, raw: Mapping[str, Any]) -> TimeGrid:
 def _output_times(src: str, times: list[float] | None, grid: TimeGrid) -> tuple[float, ...]:
     if times is None:  # the levels nearest T/4, T/2, 3T/4 and T
         q = np.array([0.25, 0.5, 0.75, 1.0]) * grid.T
-        return tuple(float(grid.t[i]) for i in sorted(set(np.abs(grid.t - q[:, None]).argmin(1))))
+        return tuple(float(grid.t[i]) for i in sorted(set(grid.nearest(q).tolist())))
     for i, t in enumerate(times):
         try:
             grid.index([t])
