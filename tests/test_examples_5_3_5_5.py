@@ -171,7 +171,11 @@ def test_ex55_wear_error_study_small(tmp_path: Path) -> None:
         ex55_study.wear_error_study(levels=(2,), reference=8, runs=("bogus",))
 
 
-def test_cli_example_55_and_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_example_55_and_errors(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    cache = tmp_path / "user-cache"  # the user's cache directory (platformdirs)
+    monkeypatch.setenv("VEMWEAR_CACHE_DIR", str(cache))
     out = tmp_path / "ex55"
     rc = main(
         [
@@ -190,7 +194,15 @@ def test_cli_example_55_and_errors(tmp_path: Path, capsys: pytest.CaptureFixture
     printed = capsys.readouterr().out
     assert "Table 1" in printed and "7.0581e-02" in printed
     assert (out / "table1.md").is_file()
-    assert list((tmp_path / ".vemwear-cache").glob("ex55_reference_h8_*.npz"))
+    # the cache is in the user's cache directory, never beside OUTDIR
+    assert list(cache.glob("ex55_reference_h8_*.npz"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ex55", "user-cache"]
+    size = sum(f.stat().st_size for f in cache.iterdir())
+    assert main(["clean", "--cache"]) == 0
+    assert capsys.readouterr().out == (
+        f"vemwear: cache {cache}: {size / 1e6:.1f} MB in 2 file(s) removed\n"
+    )
+    assert not cache.exists()
     assert (
         main(["example", "5.5", "-o", str(tmp_path / "x"), "--reference-h", "8", "--levels", "3"])
         == 2

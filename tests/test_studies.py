@@ -137,12 +137,15 @@ def test_sweep_on_the_default_local_cluster(tmp_path: Path) -> None:
     ds = sweep(path, out, workers=2, progress=False)
     assert ds.attrs["runs_computed"] == 6 and ds.attrs["runs_failed"] == 0
     back = xr.open_dataset(out / "study.nc", engine="h5netcdf")
-    assert back["max_wear"].dims == ("contact.kappa", "contact.mu")
-    assert list(back["contact.kappa"].values) == [1.0, 2.0, 4.0]
-    assert back["wear"].dims == ("contact.kappa", "contact.mu", "time", "s")
+    assert back["max_wear"].dims == ("contact_kappa", "contact_mu")
+    assert list(back["contact_kappa"].values) == [1.0, 2.0, 4.0]
+    assert back["contact_kappa"].attrs["config_key"] == "contact.kappa"
+    assert back["wear"].dims == ("contact_kappa", "contact_mu", "time", "s")
+    assert float(back["max_wear"].sel(contact_kappa=2.0, contact_mu=0.6)) == mw_at(back)
     assert back.sizes["time"] == 9 and back.sizes["s"] == 8
     mw = back["max_wear"].values
     assert np.all(np.diff(mw, axis=0) > 0), mw  # more wear with larger kappa
+    _assert_cf(out / "study.nc")
     assert np.allclose(back["wear"].isel(time=-1).max("s").values, mw)
     assert (back["status"].values == "done").all() and "[axes]" in back.attrs["study"]
     assert "kappa" in back.attrs["base_config"] and back.attrs["vemwear_version"]
@@ -408,3 +411,51 @@ def test_a_killed_worker_does_not_stop_the_study(
         if victim.poll() is None:
             victim.kill()
             victim.wait()
+
+
+def mw_at(ds: xr.Dataset) -> float:
+    """max_wear at kappa = 2, mu = 0.6 by position (index 1, 1)."""
+    return float(ds["max_wear"].values[1, 1])
+
+
+def _assert_cf(path: Path) -> None:
+    """study.nc by CF-1.10, read back with xarray and h5py (the raw attributes)."""
+    import h5py
+
+    ds = xr.open_dataset(path, engine="h5netcdf")
+    try:
+        assert ds.attrs["Conventions"] == "CF-1.10"
+        assert " vemwear " in ds.attrs["history"] and " sweep " in ds.attrs["history"]
+        for name, var in ds.variables.items():
+            assert var.attrs.get("long_name"), name
+            if var.dtype.kind in "iuf":
+                assert var.attrs.get("units"), name
+        assert ds["iterations"].dtype == np.int64 and (ds["iterations"] > 0).all()
+        for k in json.loads(ds.attrs["axis_variables"]):
+            assert k.isidentifier() and "." in ds[k].attrs["config_key"]
+    finally:
+        ds.close()
+    with h5py.File(path, "r") as f:
+        for name in ("time", "s", *json.loads(f.attrs["axis_variables"])):
+            if name in f:
+                assert "_FillValue" not in f[name].attrs, name
+        assert f["iterations"].dtype == np.int64
+
+
+def test_sweep_uses_the_active_dask_client(
+    tmp_path: Path, scheduler: tuple[str, list[int]]
+) -> None:
+    """With a client active in the process and none given, sweep runs on it (its
+    workers' pids are in the run records) and says so, instead of starting a cluster."""
+    from distributed import Client
+
+    from vemwear.studies import sweep
+
+    path = _study(tmp_path, '[axes]\n"contact.kappa" = [1.0, 2.0]\n[overrides]\n"time.steps" = 4\n')
+    said: list[str] = []
+    with Client(scheduler[0], timeout=30) as client:
+        ds = sweep(path, tmp_path / "out", progress=False, figures=False, say=said.append)
+        assert client.status == "running"  # left open
+    assert said == [f"vemwear: using the active Dask client (scheduler {scheduler[0]})"]
+    assert ds.attrs["runs_computed"] == 2
+    assert set(_pids_of_records(tmp_path / "out").values()) <= set(scheduler[1])

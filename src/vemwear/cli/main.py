@@ -121,7 +121,9 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
         )
     ):
         return EXIT_INPUT, str(exc)
-    if _is(exc, "vemwear.simulate.levels", "WearOverflowError"):
+    if _is(exc, "vemwear.simulate.levels", "WearOverflowError") or _is(
+        exc, "vemwear.runner.run", "WornThroughError"
+    ):
         return EXIT_CONVERGENCE, str(exc)
     if _is(exc, "vemwear.solvers.system", "FactorizationError"):
         return EXIT_CONVERGENCE, f"the solver failed: {exc}"

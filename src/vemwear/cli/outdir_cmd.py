@@ -1,7 +1,8 @@
 """``vemwear clean OUTDIR`` and ``vemwear export OUTDIR``: output directories of runs.
 
 ``clean`` removes the temporaries that killed runs left in or next to OUTDIR (and, with
-``--all``, the files OUTDIR's marker says vemwear wrote); nothing else. ``export`` writes
+``--all``, the files OUTDIR's marker says vemwear wrote); nothing else. ``clean
+--cache`` shows where the user's cache of vemwear is and its size, and empties it. ``export`` writes
 ``result.npz`` from the streamed ``result.h5`` of a run whose arrays were too large to
 be written in memory at the end of the run (on a machine with more memory).
 """
@@ -19,7 +20,13 @@ EXPORT_SUMMARY = "Write result.npz of an output directory from its streamed resu
 
 
 def setup_clean(p: argparse.ArgumentParser) -> None:
-    p.add_argument("outdir", metavar="OUTDIR", help="output directory of a run")
+    p.add_argument("outdir", metavar="OUTDIR", nargs="?", help="output directory of a run")
+    p.add_argument(
+        "--cache",
+        action="store_true",
+        help="show the size of vemwear's cache of reference solutions (in the user's cache "
+        "directory, or VEMWEAR_CACHE_DIR) and empty it",
+    )
     p.add_argument(
         "--all",
         action="store_true",
@@ -38,9 +45,18 @@ def setup_export(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_clean(args: argparse.Namespace) -> int:
-    """``vemwear clean OUTDIR [--all]``."""
+    """``vemwear clean OUTDIR [--all]``, ``vemwear clean --cache``."""
     from ..runner.outdir import clean_output_dir
 
+    if args.outdir is None and not args.cache:
+        raise UsageError("clean: give OUTDIR, or --cache")
+    if args.cache:
+        from ..util.cache import clear_cache, user_cache_dir
+
+        size, files = clear_cache()
+        print(f"{PROG}: cache {user_cache_dir()}: {size / 1e6:.1f} MB in {files} file(s) removed")
+        if args.outdir is None:
+            return EXIT_OK
     removed = clean_output_dir(args.outdir, everything=args.all)
     if not removed:
         print(f"{PROG}: {args.outdir}: nothing to remove")

@@ -99,7 +99,8 @@ def setup_example(p: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--cache",
         metavar="DIR",
-        help="cache directory of the reference solution (default OUTDIR/../.vemwear-cache)",
+        help="cache directory of the reference solution (default: the user's cache directory, "
+        "shown by vemwear clean --cache)",
     )
     p.set_defaults(func=cmd_example)
 
@@ -114,7 +115,8 @@ def setup_paper(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--cache",
         metavar="DIR",
-        help="cache directory of the Example 5.5 reference (default OUTDIR/../.vemwear-cache)",
+        help="cache directory of the Example 5.5 reference (default: the user's cache "
+        "directory, shown by vemwear clean --cache)",
     )
     add_common_options(p, solve=True)
     p.set_defaults(func=cmd_paper)
@@ -190,6 +192,7 @@ def cmd_example(args: argparse.Namespace) -> int:
     from ..paper import load_example
     from ..runner import atomic_output_dir, check_output_dir
     from ..simulate import SolverOptions
+    from ..util.cache import user_cache_dir
 
     mod = load_example(args.name)
     extra = _example_extra(args)
@@ -203,9 +206,7 @@ def cmd_example(args: argparse.Namespace) -> int:
         extra["order"] = args.order
     out = check_output_dir(args.outdir, args.force)
     if args.name == "5.5":
-        extra["cache"] = (
-            Path(args.cache) if args.cache is not None else out.parent / ".vemwear-cache"
-        )
+        extra["cache"] = Path(args.cache) if args.cache is not None else user_cache_dir()
     solver = SolverOptions(method=args.solver or "newton")
     t0 = time.perf_counter()
     with atomic_output_dir(out, args.force) as tmp:
@@ -266,9 +267,10 @@ def cmd_paper(args: argparse.Namespace) -> int:
     from ..paper.report import run_paper
     from ..runner import atomic_output_dir, check_output_dir
     from ..simulate import SolverOptions
+    from ..util.cache import user_cache_dir
 
     out = check_output_dir(args.outdir, args.force)
-    cache = Path(args.cache) if args.cache is not None else out.parent / ".vemwear-cache"
+    cache = Path(args.cache) if args.cache is not None else user_cache_dir()
     solver = SolverOptions(method=args.solver or "newton")
     with atomic_output_dir(out, args.force) as tmp:
         pr = run_paper(

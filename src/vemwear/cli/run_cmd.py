@@ -90,6 +90,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from ..runner import abandon_run, execute_run, prepare_run, result_rows, smallness_report
     from ..runner.outdir import refuse_locked, stale_temporaries
     from ..runner.plan import admit_sizes, check_estimate, estimate_config
+    from ..runner.run import RunComplete
 
     t0 = time.perf_counter()
     refuse_locked(args.outdir)
@@ -109,15 +110,21 @@ def cmd_run(args: argparse.Namespace) -> int:
     est = estimate_config(cfg)
     if not args.force_size:
         check_estimate(est, args.outdir, str(args.config), have=have)
-    plan = prepare_run(  # the output directory, its lock and the checkpoint, before solving
-        cfg,
-        args.config,
-        args.outdir,
-        solver,
-        force=args.force,
-        resume=args.resume,
-        solver_flag=args.solver,
-    )
+    try:  # the output directory, its lock and the checkpoint, before solving
+        plan = prepare_run(
+            cfg,
+            args.config,
+            args.outdir,
+            solver,
+            force=args.force,
+            resume=args.resume,
+            solver_flag=args.solver,
+        )
+    except RunComplete as done:
+        print(f"{PROG}: {done}")
+        return EXIT_OK
+    if plan.note:
+        say(f"{PROG}: {plan.note}")
     try:  # assembles the stiffness: may fail before any level, like the run
         _, warning = smallness_report(cfg.problem)
         for w in [warning, *_overshoot(cfg)]:

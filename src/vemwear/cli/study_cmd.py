@@ -64,6 +64,13 @@ def setup_sweep(p: argparse.ArgumentParser) -> None:
         help="runs per Dask task (default: four or more tasks per worker, at most 16 runs "
         "each); chunks save the scheduler's work when runs take milliseconds",
     )
+    p.add_argument(
+        "--max-runs",
+        type=positive_int,
+        default=100_000,
+        metavar="N",
+        help="refuse a design of more runs (counted before any is built; default 100000)",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_debug_option(p)
     p.set_defaults(func=cmd_sweep)
@@ -104,7 +111,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from ..studies import load_study, sweep
 
     t0 = time.perf_counter()
-    st = load_study(args.study)  # every run validated before the cluster starts
+    # counted, then every run validated, before the cluster starts
+    st = load_study(args.study, max_runs=args.max_runs, say=say)
     say(f"{PROG}: {args.study}: {len(st.runs)} runs ({st.kind}), all valid")
     ds = sweep(
         st,

@@ -38,7 +38,7 @@ from ..simulate.cycles import CycleJump
 from ..solvers import resolve_backend
 from ..vem import Material
 from . import schema as s
-from .checks import check_dims, check_loads, check_velocity
+from .checks import check_dims, check_loads, check_scales, check_velocity
 from .errors import ConfigError, at, from_library, from_validation
 from .fields import FieldExpression, library_data, velocity_data
 from .mesh_forms import MeshFile, mesh_family
@@ -208,7 +208,7 @@ def _time(src: str, t: Any, raw: Mapping[str, Any]) -> TimeGrid:
 def _output_times(src: str, times: list[float] | None, grid: TimeGrid) -> tuple[float, ...]:
     if times is None:  # the levels nearest T/4, T/2, 3T/4 and T
         q = np.array([0.25, 0.5, 0.75, 1.0]) * grid.T
-        return tuple(float(grid.t[i]) for i in sorted(set(np.abs(grid.t - q[:, None]).argmin(1))))
+        return tuple(float(grid.t[i]) for i in sorted(set(grid.nearest(q).tolist())))
     for i, t in enumerate(times):
         try:
             grid.index([t])
@@ -348,9 +348,12 @@ def load_config(
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"{path}: config file not found")
+    from ..util.text import NotUtf8Error, read_utf8
+
     try:
-        with path.open("rb") as fh:
-            data = tomllib.load(fh)
+        data = tomllib.loads(read_utf8(path))
+    except NotUtf8Error as exc:
+        raise ConfigError(f"{path}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from exc
     except OSError as exc:
@@ -422,6 +425,7 @@ def parse_config(
 
     mesh, mesh_source = _mesh(src, c.mesh, raw["mesh"], Path(base_dir))
     check_dims(src, c, raw, 3 if isinstance(mesh, Mesh3D) else 2)
+    check_scales(src, mesh, c)
     if parts.selectors:
         with at(src, "[boundary]", raw.get("boundary", {})):
             if isinstance(mesh, Mesh3D):

@@ -180,3 +180,31 @@ def check_loads(src: str, pr: Problem, parts: Roles) -> None:
                         f"{src}: {name} = {f.__name__} is not finite near vertex {v} "
                         f"(x = {_pt(pr.mesh.points[v])}){when}"
                     )
+
+
+#: Lengths a run can compute with: areas, volumes and the stiffness (lengths to the
+#: power 1 to 3 and their inverses) stay far from IEEE underflow and overflow.
+LENGTH_RANGE = (1e-100, 1e100)
+
+
+def check_scales(src: str, mesh: Any, c: s.ConfigFile) -> None:
+    """Refuse a body or a layer thickness of a size that floating point cannot compute
+    with, naming it (a tiny body's cell areas underflow and the stiffness overflows,
+    which else surfaced as a message on the material; a huge g overflowed the check of
+    the compliance law)."""
+    lo, hi = LENGTH_RANGE
+    pts = np.asarray(mesh.points)
+    extent = float(np.max(pts.max(axis=0) - pts.min(axis=0))) if pts.size else 0.0
+    if not lo <= extent <= hi:
+        raise ConfigError(
+            f"{src}: [mesh] the body measures {extent:g} across: too small or too large to "
+            f"compute with (its cell measures and the stiffness under- or overflow); use "
+            f"units in which its size lies between {lo:g} and {hi:g}"
+        )
+    g = c.contact.g
+    if isinstance(g, int | float) and not abs(g) <= hi:
+        raise ConfigError(
+            f"{src}: [contact] g = {g:g} is too large to compute with (the layer's "
+            f"penetrations and the law p(r) on them overflow); use units in which it is at "
+            f"most {hi:g}"
+        )

@@ -181,15 +181,18 @@ def reference_solution(
 
 
 # ----------------------------------------------------------------------------- cache
-def default_cache_dir(outdir: str | os.PathLike[str]) -> Path:
-    """``OUTDIR/../.vemwear-cache``.
+def default_cache_dir(outdir: str | os.PathLike[str] | None = None) -> Path:
+    """The user's cache directory of vemwear (:func:`vemwear.util.cache.user_cache_dir`),
+    never a place beside the output directory.
 
     Parameters
     ----------
-    outdir : path
-        The output directory.
+    outdir : path, optional
+        The output directory (not used: the cache does not depend on it).
     """
-    return Path(outdir).absolute().parent / ".vemwear-cache"
+    from ..util.cache import user_cache_dir
+
+    return user_cache_dir()
 
 
 def _solver_desc(opts: SolverOptions) -> dict[str, Any]:

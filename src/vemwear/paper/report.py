@@ -88,7 +88,7 @@ def run_paper(
         Step solver of every run.
     cache : path, optional
         Cache directory of the examples that take one (Example 5.5's reference; default:
-        ``outdir/../.vemwear-cache``).
+        the user's cache directory, :func:`vemwear.util.cache.user_cache_dir`).
     examples : sequence of str
         Which examples (default: all of :data:`PAPER_ORDER` that are registered).
     progress : bool
@@ -111,7 +111,11 @@ def run_paper(
     t0 = time.perf_counter()
     out = Path(outdir)
     opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
-    cache_dir = Path(cache) if cache is not None else Path(out).absolute().parent / ".vemwear-cache"
+    if cache is None:
+        from ..util.cache import user_cache_dir
+
+        cache = user_cache_dir()
+    cache_dir = Path(cache)
     skipped = [n for n in examples if n not in EXAMPLES]
     plan: dict[str, tuple[Example, dict[str, Any]]] = {}
     for name in examples:  # invalid sizes fail before any run

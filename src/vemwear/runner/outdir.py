@@ -1,14 +1,20 @@
 """Output directories: checked before any computation, never a trap for the user's files.
 
 Every output directory vemwear writes holds a marker file ``.vemwear`` (JSON: format,
-version, command, ``state`` — ``running``, ``partial`` or ``complete`` — and ``files``,
-the top-level names vemwear wrote there). The rules:
+version, command, ``state`` — ``running``, ``partial`` or ``complete`` —, ``files``,
+the top-level names vemwear wrote there, and ``manifest``, the size and modification
+time of each of them when the marker was written). The rules:
 
 * a missing directory is created; an existing **empty** directory, a mount point (a
   Docker volume) included, is written into as it is, never renamed or removed;
 * a non-empty directory with the marker is refused unless ``--force``, which removes
   only the entries the marker lists (and vemwear's stale temporaries); anything else in
-  it is kept;
+  it is kept. A user's file that the new output would overwrite (a ``forces.png`` put
+  there after a run without figures), or one of the listed files changed since vemwear
+  wrote it, makes ``--force`` refuse, naming it;
+* a directory left by a run killed before its first checkpoint (only vemwear's lock,
+  its marker and its stream, no live run holding the lock) is taken as empty by
+  ``run``, and emptied by ``clean``;
 * a non-empty directory without the marker is refused even with ``--force``: vemwear
   never deletes what it did not write;
 * the place is checked for being writable (a probe file, removed at once) and for free
@@ -39,15 +45,21 @@ from typing import Any
 
 from .. import __version__
 from ..util.atomic import atomic_dir, is_temporary, write_atomic
+from .checkpoint import CHECKPOINT_NAME
 
 __all__ = [
     "LOCK_NAME",
     "MARKER_NAME",
+    "PARTIAL_NAME",
     "OutputDirError",
     "add_to_marker",
     "atomic_output_dir",
+    "changed_entries",
     "check_output_dir",
     "clean_output_dir",
+    "completed_leftovers",
+    "foreign_entries",
+    "killed_before_checkpoint",
     "locked_by",
     "output_lock",
     "prepare_output_dir",
@@ -62,6 +74,8 @@ MARKER_NAME = ".vemwear"
 #: The lock file of a running run.
 LOCK_NAME = ".vemwear.lock"
 _FORMAT = "vemwear-outdir/1"
+#: Explanation written into the output directory of an unfinished run.
+PARTIAL_NAME = "PARTIAL.txt"
 
 
 class OutputDirError(ValueError):
@@ -85,6 +99,7 @@ def write_marker(
     out = Path(outdir)
     old = read_marker(out) or {}
     names = sorted({*files, MARKER_NAME, LOCK_NAME} - {""})
+    manifest = {n: _stamp(out / n) for n in names if n not in (MARKER_NAME, LOCK_NAME)}
     data = {
         "format": _FORMAT,
         "vemwear_version": __version__,
@@ -93,8 +108,64 @@ def write_marker(
         "created": old.get("created") or datetime.now(UTC).isoformat(timespec="seconds"),
         "updated": datetime.now(UTC).isoformat(timespec="seconds"),
         "files": names,
+        "manifest": {n: v for n, v in manifest.items() if v is not None},
     }
     write_atomic(out / MARKER_NAME, json.dumps(data, indent=2) + "\n")
+
+
+def _stamp(p: Path) -> dict[str, int] | None:
+    """Size (bytes, summed over a directory's files) and modification time of ``p``."""
+    try:
+        st = p.lstat()
+    except OSError:
+        return None
+    size = st.st_size
+    if p.is_dir() and not p.is_symlink():
+        size = sum(f.lstat().st_size for f in p.rglob("*") if not f.is_dir())
+    return {"size": int(size), "mtime_ns": int(st.st_mtime_ns)}
+
+
+def foreign_entries(out: Path, marker: dict[str, Any]) -> list[str]:
+    """The entries of ``out`` that its marker does not list (a user's files)."""
+    ours = {*marker.get("files", []), MARKER_NAME, LOCK_NAME}
+    return sorted(p.name for p in out.iterdir() if p.name not in ours and not is_temporary(p.name))
+
+
+def changed_entries(out: Path, marker: dict[str, Any]) -> list[str]:
+    """The listed entries of a complete output changed since vemwear wrote them."""
+    if marker.get("state") != "complete":  # a stopped run's stream changes by design
+        return []
+    recorded = marker.get("manifest") or {}
+    return sorted(n for n, v in recorded.items() if _stamp(out / n) not in (None, v))
+
+
+def killed_before_checkpoint(outdir: str | os.PathLike[str]) -> bool:
+    """Whether ``outdir`` holds only what a run killed before its first checkpoint left:
+    its lock, a marker of a running run and that marker's files, no checkpoint, and no
+    live run holding the lock (nothing in it can be continued)."""
+    out = Path(outdir)
+    if not out.is_dir() or locked_by(out) is not None or (out / CHECKPOINT_NAME).exists():
+        return False
+    names = {p.name for p in out.iterdir() if not is_temporary(p.name)}
+    if not names:
+        return False
+    marker = read_marker(out)
+    if marker is None:
+        return names <= {LOCK_NAME, MARKER_NAME}  # an unreadable marker is not vemwear's
+    return marker.get("state") == "running" and names <= {*marker["files"], LOCK_NAME}
+
+
+def completed_leftovers(out: Path) -> list[Path]:
+    """The checkpoint and ``PARTIAL.txt`` of a complete run killed just after its marker
+    said so (they are removed after it is written)."""
+    marker = read_marker(out)
+    if marker is None or marker.get("state") != "complete":
+        return []
+    return [
+        out / n
+        for n in (CHECKPOINT_NAME, PARTIAL_NAME)
+        if n not in marker.get("files", []) and (out / n).exists()
+    ]
 
 
 def add_to_marker(outdir: str | os.PathLike[str], names: Sequence[str]) -> None:
@@ -195,13 +266,17 @@ def clean_output_dir(outdir: str | os.PathLike[str], *, everything: bool = False
     if pid is not None:
         raise OutputDirError(f"a vemwear run (pid {pid}) is writing into {out}; not cleaning")
     removed = stale_temporaries(out)
-    if everything:
+    if killed_before_checkpoint(out):  # a run killed in its set-up: nothing to keep
+        removed += [p for p in out.iterdir() if not is_temporary(p.name)]
+    elif everything:
         marker = read_marker(out)
         if marker is None:
             raise OutputDirError(f"{out} has no vemwear marker ({MARKER_NAME}); not cleaning")
         names = [n for n in marker.get("files", []) if n and "/" not in n and n != MARKER_NAME]
         removed += [out / n for n in names if (out / n).exists() or (out / n).is_symlink()]
         removed.append(out / MARKER_NAME)
+    elif out.is_dir():
+        removed += completed_leftovers(out)
     for p in removed:
         _remove(p)
     return removed
@@ -221,6 +296,22 @@ def _check_place(out: Path, protect: Sequence[str | os.PathLike[str]]) -> None:
         raise OutputDirError(f"cannot create {out}: {out.parent} is not a directory")
 
 
+def _refuse_users_files(out: Path, marker: dict[str, Any], reserved: Sequence[str]) -> None:
+    """--force: refuse if the new output would overwrite a file vemwear did not write."""
+    changed = changed_entries(out, marker)
+    if changed:
+        raise OutputDirError(
+            f"--force refused: {out / changed[0]} changed since vemwear wrote it (a user's "
+            "file?); move it away or choose another output directory"
+        )
+    clash = [n for n in foreign_entries(out, marker) if n in set(reserved)]
+    if clash:
+        raise OutputDirError(
+            f"--force refused: {out / clash[0]} was not written by vemwear and the new "
+            "output has a file of that name; move it away or choose another output directory"
+        )
+
+
 def _existing_ancestor(p: Path) -> Path:
     while not p.exists():
         p = p.parent
@@ -236,6 +327,7 @@ def check_output_dir(
     force: bool = False,
     protect: Sequence[str | os.PathLike[str]] = (),
     need_bytes: int = 0,
+    reserved: Sequence[str] = (),
 ) -> Path:
     """Check that ``outdir`` may receive vemwear's output, creating nothing.
 
@@ -250,6 +342,9 @@ def check_output_dir(
         working directory always).
     need_bytes : int
         Free space the output needs.
+    reserved : sequence of str
+        The names the output may have: a user's entry of one of these names refuses
+        ``force`` (it would be overwritten).
 
     Returns
     -------
@@ -264,9 +359,10 @@ def check_output_dir(
     out = Path(outdir).expanduser().absolute()
     _check_place(out, protect)
     refuse_locked(out)
-    if out.is_dir():
+    if out.is_dir() and not killed_before_checkpoint(out):
         if any(out.iterdir()):
-            if read_marker(out) is None:
+            marker = read_marker(out)
+            if marker is None:
                 raise OutputDirError(
                     f"output directory {out} is not empty and was not written by vemwear (no "
                     f"{MARKER_NAME} marker); --force replaces only vemwear's own output "
@@ -277,6 +373,7 @@ def check_output_dir(
                     f"output directory {out} holds the output of an earlier vemwear run; "
                     "use --force to replace it"
                 )
+            _refuse_users_files(out, marker, reserved)
     anc = _existing_ancestor(out)
     if not os.access(anc, os.W_OK | os.X_OK):
         raise OutputDirError(f"cannot write into {out}: {anc} is not writable")
@@ -314,14 +411,18 @@ def prepare_output_dir(
     protect: Sequence[str | os.PathLike[str]] = (),
     need_bytes: int = 0,
     command: str = "run",
+    reserved: Sequence[str] = (),
 ) -> Path:
     """Check ``outdir`` (:func:`check_output_dir`), create it if missing, remove the files
     of an earlier vemwear run there if ``force``, and check that it takes a file.
 
     A directory created here is removed again if a later check fails, so a refused run
-    leaves nothing behind.
+    leaves nothing behind. What a run killed before its first checkpoint left there is
+    removed (:func:`killed_before_checkpoint`).
     """
-    out = check_output_dir(outdir, force, protect, need_bytes)
+    out = check_output_dir(outdir, force, protect, need_bytes, reserved)
+    if killed_before_checkpoint(out):
+        clean_output_dir(out)
     created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
     try:
@@ -375,7 +476,12 @@ def atomic_output_dir(outdir: str | os.PathLike[str], force: bool = False) -> It
         yield tmp
         write_marker(tmp, "complete", [p.name for p in tmp.iterdir()], "example")
         if old is not None:  # keep what the user put into the old output directory
-            ours = set(old.get("files", []))
-            for p in out.iterdir():
-                if p.name not in ours and not is_temporary(p.name) and not (tmp / p.name).exists():
-                    os.replace(p, tmp / p.name)
+            users = foreign_entries(out, old)
+            clash = [n for n in users if (tmp / n).exists() or (tmp / n).is_symlink()]
+            if clash:  # the old output stays as it was
+                raise OutputDirError(
+                    f"{out / clash[0]} was not written by vemwear and the new output has a "
+                    "file of that name; move it away and run again"
+                )
+            for name in users:
+                os.replace(out / name, tmp / name)

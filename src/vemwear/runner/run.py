@@ -36,6 +36,8 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from ..post.outputs import write_outputs
 from ..util.atomic import write_atomic
 from ..util.hashing import sha256_file, sha256_json
@@ -43,7 +45,10 @@ from .checkpoint import CHECKPOINT_NAME, differences, read_checkpoint, write_che
 from .outdir import (
     LOCK_NAME,
     MARKER_NAME,
+    PARTIAL_NAME,
     OutputDirError,
+    completed_leftovers,
+    killed_before_checkpoint,
     output_lock,
     prepare_output_dir,
     read_marker,
@@ -60,7 +65,9 @@ if TYPE_CHECKING:
 __all__ = [
     "PARTIAL_NAME",
     "ResumeError",
+    "RunComplete",
     "RunPlan",
+    "WornThroughError",
     "abandon_run",
     "execute_run",
     "hold_lock",
@@ -68,12 +75,74 @@ __all__ = [
     "storage_plan",
 ]
 
-#: Explanation written into the output directory of an unfinished run.
-PARTIAL_NAME = "PARTIAL.txt"
-
 
 class ResumeError(OutputDirError):
     """``--resume`` is not possible (no checkpoint, other inputs, damaged files)."""
+
+
+class RunComplete(Exception):
+    """``--resume`` of a run that is complete: nothing to do (the message says so)."""
+
+
+def output_names() -> list[str]:
+    """Every top-level name a run may write into its output directory (a user's file of
+    one of these names is never overwritten: ``--force`` refuses)."""
+    from ..post.outputs import FIGURE_NAMES, FIGURE_NAMES_3D
+    from ..post.results import NPZ_NAME, SUMMARY_NAME
+    from ..post.stream import STREAM_NAME
+
+    series = ["solution.xdmf", "solution.h5", "solution.pvd", "solution"]
+    figures = [*FIGURE_NAMES.values(), *FIGURE_NAMES_3D.values()]
+    names = {STREAM_NAME, CHECKPOINT_NAME, PARTIAL_NAME, SUMMARY_NAME, NPZ_NAME}
+    return sorted({*names, *figures, *series})
+
+
+class WornThroughError(ValueError):
+    """The wear exceeds the thickness g of the soft layer: the run stops there."""
+
+
+class _WearGuard:
+    """A level sink that stops the run at the first level whose wear exceeds g.
+
+    In the model the wear stays below the penetration ``u_nu <= g``: once ``w`` reaches
+    ``u_nu`` the soft layer carries no pressure there and wears no more. Wear beyond g is
+    the explicit rule (3.22) overshooting (``k kappa |v*| L_p >= 1``), and every level
+    after it is meaningless (``kappa = 1e308`` gave a wear of 5.5e304 on a layer 0.1
+    thick); so the run stops with the finished levels saved, and says why.
+    """
+
+    def __init__(self, sink: Any, problem: Any) -> None:
+        self._sink, self._problem = sink, problem
+        self._g = problem.nodal["g"]
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._sink, name)
+
+    def level(self, n: int, w: Any, solution: Any) -> None:
+        if np.any(w > self._g):
+            raise _worn_through(self._problem, n, w, self._g)
+        self._sink.level(n, w, solution)
+
+
+def _worn_through(problem: Any, n: int, w: Any, g: Any) -> WornThroughError:
+    from ..simulate.explicit import overshoot
+
+    a = int(np.argmax(w - g))
+    x = ", ".join(f"{c:.4g}" for c in problem.contact.points[a])
+    t = problem.time.t
+    value, _, safe = overshoot(problem)
+    why = (
+        f"the explicit wear step overshoots (k kappa |v*| L_p up to {value:.3g}); use time "
+        f"steps below {safe:.3g} or a smaller kappa"
+        if value >= 1.0 and safe > 0
+        else "check the scale of [contact] kappa, v_star and the compliance law"
+    )
+    return WornThroughError(
+        f"the wear exceeds the layer thickness at time level {n} (t = {t[n]:g}): w = "
+        f"{w[a]:.6g} > g = {float(np.broadcast_to(g, w.shape)[a]):g} at contact node {a} "
+        f"(x = ({x})); the soft layer is worn through and the levels from here on would "
+        f"not be physical: {why}"
+    )
 
 
 def storage_plan(cfg: Config) -> StoragePlan:
@@ -114,6 +183,8 @@ class RunPlan:
         Holds the lock of the output directory (:func:`hold_lock`) until it is closed.
     locked : bool
         Whether ``lock`` holds it.
+    note : str
+        A line to show before the run (e.g. a resume that starts from level 0).
     """
 
     cfg: Config
@@ -128,6 +199,7 @@ class RunPlan:
     created: bool = False
     lock: ExitStack = field(default_factory=ExitStack)
     locked: bool = False
+    note: str = ""
 
 
 def hold_lock(plan: RunPlan) -> None:
@@ -206,19 +278,36 @@ def prepare_run(
         command=_resume_command(config_path, outdir, solver_flag),
     )
     refuse_locked(outdir)
+    marker = read_marker(outdir) if outdir.is_dir() else None
+    if resume and marker is not None and marker.get("state") == "complete":
+        for p in completed_leftovers(outdir):  # a run killed just after it completed
+            p.unlink(missing_ok=True)
+        raise RunComplete(f"{outdir} holds a complete run; there is nothing to resume")
+    if resume and killed_before_checkpoint(outdir):
+        resume = False  # killed before its first checkpoint: nothing to go on from
+        plan.note = f"{outdir}: the stopped run saved no level; starting from level 0"
     if resume:  # a refused resume leaves the directory as it was, lock file included
         plan.state, plan.previous_solver = _load_checkpoint(outdir, meta)
         hold_lock(plan)
         return plan
-    marker = read_marker(outdir) if outdir.is_dir() else None
-    if marker is not None and marker.get("state") in ("partial", "running") and not force:
+    if (
+        marker is not None
+        and marker.get("state") in ("partial", "running")
+        and not force
+        and not killed_before_checkpoint(outdir)
+    ):
         raise ResumeError(
             f"{outdir} holds a stopped run ({marker.get('state')}); continue it with --resume, "
             "or start over with --force"
         )
     plan.created = not outdir.exists()
     prepare_output_dir(
-        outdir, force=force, protect=[config_path], need_bytes=need_bytes, command="run"
+        outdir,
+        force=force,
+        protect=[config_path],
+        need_bytes=need_bytes,
+        command="run",
+        reserved=output_names(),
     )
     hold_lock(plan)  # before any assembly: a second run is refused at once
     return plan
@@ -256,7 +345,7 @@ def _reason(exc: BaseException) -> str:
     by_signal = stop_reason(exc)
     if by_signal is not None:
         return by_signal
-    if isinstance(exc, WearOverflowError):
+    if isinstance(exc, WearOverflowError | WornThroughError):
         return str(exc)
     if isinstance(exc, ConvergenceError):
         return f"the solver did not converge: {exc}"
@@ -280,20 +369,22 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
     out, cfg = plan.out, plan.cfg
     hold_lock(plan)
     with plan.lock:
-        write_marker(out, "running", [STREAM_NAME, CHECKPOINT_NAME], command="run")
+        # every name the run may write: a kill in its last writes leaves only listed files
+        write_marker(out, "running", output_names(), command="run")
         meta = {**plan.meta, "written": ""}
 
         def on_checkpoint(state: LoopState) -> None:
             meta["written"] = datetime.now(UTC).isoformat(timespec="seconds")
             write_checkpoint(out, state, meta)
 
-        sink = H5Sink(
+        h5 = H5Sink(
             out / STREAM_NAME,
             cfg.problem,
             plan.storage,
             resume=plan.state is not None,
             on_checkpoint=on_checkpoint,
         )
+        sink = _WearGuard(h5, cfg.problem)
         timings: dict[str, float] = {}
         try:
             final = run_levels(
@@ -343,10 +434,9 @@ def _stop(plan: RunPlan, sink: Any, exc: BaseException) -> None:
             sink.checkpoint(state)
             sink.close()
             _write_partial(plan, c, _reason(exc))
-        note = (
-            f"; the {c} finished time levels (of {L}) are saved in {plan.out}; "
-            f"continue with: {plan.command}"
-        )
+        note = f"; the {c} finished time levels (of {L}) are saved in {plan.out}"
+        if not isinstance(exc, WornThroughError):  # the same data would stop there again
+            note += f"; continue with: {plan.command}"
     except BaseException as err:  # a second failure must not hide the first one
         note = f"; the {c} finished time levels could not be saved ({type(err).__name__}: {err})"
     try:
@@ -416,9 +506,7 @@ It refuses to start if the physics, the discretization or the kept levels change
 {CHECKPOINT_NAME} the state to go on from.
 """
     write_atomic(plan.out / PARTIAL_NAME, text)
-    write_marker(
-        plan.out, "partial", [STREAM_NAME, CHECKPOINT_NAME, SUMMARY_NAME, PARTIAL_NAME], "run"
-    )
+    write_marker(plan.out, "partial", output_names(), "run")
 
 
 def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
@@ -435,9 +523,9 @@ def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
     cfg, out = plan.cfg, plan.out
     need, avail = stream_bytes(out / STREAM_NAME), available_memory()
     if avail and 3 * need > avail:
-        for name in (CHECKPOINT_NAME, PARTIAL_NAME):
-            (out / name).unlink(missing_ok=True)
         write_marker(out, "complete", [STREAM_NAME], command="run")
+        for name in (CHECKPOINT_NAME, PARTIAL_NAME):  # after the marker: see completed_leftovers
+            (out / name).unlink(missing_ok=True)
         return (
             f"the kept arrays take {need / 1e9:.2f} GB, too much for the "
             f"{avail / 1e9:.2f} GB of memory available: {out / STREAM_NAME} holds the whole "
@@ -464,8 +552,8 @@ def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
         extra=extra,
         **({"paraview": cfg.output.paraview} if hasattr(cfg.output, "paraview") else {}),
     )
-    for name in (CHECKPOINT_NAME, PARTIAL_NAME):
-        (out / name).unlink(missing_ok=True)
     files = [STREAM_NAME, *(f.split("/")[0] for names in written.values() for f in names)]
     write_marker(out, "complete", sorted(set(files)), command="run")
+    for name in (CHECKPOINT_NAME, PARTIAL_NAME):  # after the marker: see completed_leftovers
+        (out / name).unlink(missing_ok=True)
     return result

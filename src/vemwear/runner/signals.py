@@ -8,6 +8,13 @@ the run (at once, or at the end of a checkpoint being written: :func:`saving` ma
 such sections). A second signal does not abandon the save of the finished levels that
 follows: a line says so (``... please wait (once more to abandon the save)``); only a
 third one abandons it.
+
+The handler never raises inside a finalizer (``weakref.finalize``, ``__del__``): Python
+prints and swallows an exception raised there, and the run would go on. A signal that
+lands in one is kept as a flag; a timer (``SIGALRM``, every 50 ms) raises it at the
+first instant outside, and :func:`check_stop` raises it at the safe points that call
+it. So a run stops within a fraction of a second of the signal at any instant (longer
+only while a single call into compiled code does not return).
 """
 
 from __future__ import annotations
@@ -16,9 +23,10 @@ import signal
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
+from types import FrameType
 from typing import Any
 
-__all__ = ["Terminated", "saving", "signals_as_interrupts", "stop_reason"]
+__all__ = ["Terminated", "check_stop", "saving", "signals_as_interrupts", "stop_reason"]
 
 _NAMES = {"SIGTERM": "terminated (SIGTERM)", "SIGHUP": "hung up (SIGHUP)"}
 
@@ -36,6 +44,7 @@ class _State:
     pending: BaseException | None = None  # the stop signal received while saving
     stopping = False  # a signal has stopped the run: its levels are being saved
     count = 0  # signals received since
+    deferred: BaseException | None = None  # a signal that landed in a finalizer, to raise
 
 
 def stop_reason(exc: BaseException) -> str | None:
@@ -54,19 +63,65 @@ def _say(line: str) -> None:
         pass
 
 
-def _handler(signum: int, frame: Any) -> None:
+#: Code that must never see an exception from a signal handler: Python swallows it.
+_FINALIZERS = frozenset({"__del__", "_exitfunc"})
+
+
+def _in_finalizer(frame: FrameType | None) -> bool:
+    """Whether ``frame`` runs inside a finalizer (``__del__``, ``weakref.finalize``)."""
+    while frame is not None:
+        code = frame.f_code
+        if code.co_name in _FINALIZERS or (
+            code.co_name == "__call__" and code.co_filename.endswith("weakref.py")
+        ):
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _raise(exc: BaseException, frame: FrameType | None) -> None:
+    """Raise ``exc`` here, or, inside a finalizer, as soon as the finalizer is left."""
+    if _in_finalizer(frame):
+        _State.deferred = exc
+        signal.setitimer(signal.ITIMER_REAL, _RETRY)
+        return
+    _State.deferred = None
+    raise exc
+
+
+#: Seconds between two tries to raise a signal that landed in a finalizer.
+_RETRY = 0.05
+
+
+def _retry(signum: int, frame: FrameType | None) -> None:
+    if _State.deferred is not None:
+        _raise(_State.deferred, frame)
+
+
+def check_stop() -> None:
+    """A safe point: raise the stop signal that landed in a finalizer, if any."""
+    exc = _State.deferred
+    if exc is not None:
+        _State.deferred = None
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        raise exc
+
+
+def _handler(signum: int, frame: FrameType | None) -> None:
     name = signal.Signals(signum).name
     exc: BaseException = KeyboardInterrupt() if name == "SIGINT" else Terminated(name)
     if not _State.stopping:  # the first signal stops the run (after a checkpoint being saved)
         _State.stopping = True
         _say(f"vemwear: {stop_reason(exc)}; stopping")
         if _State.depth == 0:
-            raise exc
+            _raise(exc, frame)
+            return
         _State.pending = exc
         return
     _State.count += 1
     if _State.count >= 2:  # the second signal during the save abandons it
-        raise exc
+        _raise(exc, frame)
+        return
     _say("vemwear: saving the finished levels; please wait (once more to abandon the save)")
 
 
@@ -75,18 +130,20 @@ def signals_as_interrupts() -> Iterator[None]:
     """Install the handlers of SIGINT, SIGTERM and SIGHUP (main thread only), restore after."""
     old: dict[int, Any] = {}
     try:
-        for name in ("SIGINT", "SIGTERM", "SIGHUP"):
+        for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGALRM"):
             sig = getattr(signal, name, None)
             if sig is not None:
-                old[sig] = signal.signal(sig, _handler)
+                old[sig] = signal.signal(sig, _retry if name == "SIGALRM" else _handler)
     except ValueError:  # not the main thread
         pass
     try:
         yield
     finally:
+        if old:
+            signal.setitimer(signal.ITIMER_REAL, 0)
         for sig, h in old.items():
             signal.signal(sig, h)
-        _State.stopping, _State.count, _State.pending = False, 0, None
+        _State.stopping, _State.count, _State.pending, _State.deferred = False, 0, None, None
 
 
 @contextmanager

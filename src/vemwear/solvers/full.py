@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import NDArray
 
 from .backends import factorize
 from .newton import NewtonOptions
@@ -30,6 +31,7 @@ from .system import (
     ConvergenceError,
     StepData,
     StepSolution,
+    at_rounding_floor,
     check_converged,
     kkt_residuals,
 )
@@ -66,11 +68,22 @@ class FullNewton:
             u, p_rigid = np.zeros(s.n_free), np.zeros(s.m)
         N, Tau, weights = s.N, s.Tau, s.weights
         it = 0
+        last: tuple[NDArray, NDArray] | None = None
+        same = 0  # Newton steps in a row on one piece (active set, slopes)
         while it < opt.max_iter:
-            it += 1
             y = N @ u
             p_soft, dp = s.p(y - step.w), s.p.derivative(y - step.w)
             active = p_rigid + s.c_ncp * (y - s.g) > 0
+            if last is not None and np.array_equal(active, last[0]) and np.array_equal(dp, last[1]):
+                same += 1
+                if same >= 2:  # the residual of the iterate, only where it may stop
+                    res = kkt_residuals(s, step, u, np.maximum(p_rigid, 0.0))
+                    if at_rounding_floor(same, max(res.values()) <= opt.tol):
+                        break
+            else:
+                same = 0
+            last = (active, dp)
+            it += 1
             if s.rows == 1:
                 J = (
                     s.K

@@ -38,14 +38,11 @@ from .system import (
     ConvergenceError,
     StepData,
     StepSolution,
+    at_rounding_floor,
     check_converged,
     kkt_residuals_block,
 )
 from .threads import solver_threads
-
-#: Newton steps in a row on one piece after which the condensed iteration stops
-#: (:meth:`CondensedNewton._iterate`).
-_STALL = 4
 
 
 @dataclass(frozen=True)
@@ -438,12 +435,7 @@ class CondensedNewton:
         inv_g = self.inv_g_ref
         stop = 0.1 * opt.tol
         seen: set[bytes] = set()  # the pieces left (their active sets and slopes)
-        # steps in a row on one piece (active set, slopes): the iterate after such a
-        # step solves the piece's linear system, and a second one refines it; past
-        # that only rounding changes, so an iterate within tol is final, and one above
-        # it after STALL steps will not get there (a residual floor above 0.1 tol: a
-        # load that moves the body 1e5 times g, or a very stiff layer)
-        last, same = None, 0
+        last, same = None, 0  # steps in a row on one piece: at_rounding_floor
         while True:
             r = y - wear
             p_soft = law(r)
@@ -465,7 +457,7 @@ class CondensedNewton:
             red = self.reduced_matrix(active, dp, fric)
             if red is last:
                 same += 1
-                if (same >= 2 and max(errors) <= opt.tol) or same >= _STALL:
+                if at_rounding_floor(same, max(errors) <= opt.tol):
                     return y, p_rigid, p_soft, it - 1, errors, False
             else:
                 same = 0

@@ -30,7 +30,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .backends import factorize, schur_factorize
-from .system import _TINY, ContactSystem, ConvergenceError, StepData
+from .system import _TINY, ContactSystem, ConvergenceError, StepData, at_rounding_floor
 
 __all__ = ["AnchoredFactor", "RigidModes", "choose_anchors", "layer_x", "rigid_modes"]
 
@@ -305,7 +305,7 @@ def newton_rigid(solver: Any, step: StepData, d: NDArray, start: tuple | None, i
             piece = active.tobytes() + dp.tobytes()
             same = same + 1 if piece == last else 0
             last = piece
-            if (same >= 2 and max(errors) <= opt.tol) or same >= 4:
+            if at_rounding_floor(same, max(errors) <= opt.tol):
                 done, it = True, it - 1
         if done:
             if max(errors) > opt.tol and not (np.any(p_soft) or np.any(p_rigid)):

@@ -429,6 +429,24 @@ def _residuals_block(
     ]
 
 
+#: Newton steps in a row on one piece after which an iteration stops
+#: (:func:`at_rounding_floor`).
+_STALL = 4
+
+
+def at_rounding_floor(same: int, within_tol: bool) -> bool:
+    """Whether a semismooth Newton iteration stops at the rounding floor of its residual.
+
+    ``same`` counts the steps in a row taken on one piece (active set and slopes): the
+    iterate after the first such step solves the piece's linear system and a second one
+    refines it; past that only rounding changes. So an iterate within tol after two such
+    steps is final, and one above it after :data:`_STALL` steps will not get there (a
+    residual floor above the stopping threshold: a load that moves the body 1e5 times g,
+    or a very stiff layer). Both Newton solvers stop by this rule (docs/method.md).
+    """
+    return (same >= 2 and within_tol) or same >= _STALL
+
+
 def condensed_residuals(
     system: ContactSystem, y: NDArray, p_rigid: NDArray, R: NDArray
 ) -> dict[str, float]:

@@ -1,10 +1,19 @@
 """The result of a study: one xarray Dataset, written as ``OUTDIR/study.nc``.
 
-Dimensions: for a ``grid`` design each axis is a dimension named by its key path
-(``contact.kappa``) with the axis values as its coordinate; for ``zip``, ``lhs`` and
-``sobol`` designs the runs are a dimension ``run`` and each axis is a coordinate along
-it. Axis values that are arrays (``mesh.divisions = [16, 8]``) become strings
-(``"[16, 8]"``).
+The file follows the CF conventions 1.10 (``Conventions``, ``history``; ``units`` and
+``long_name`` on every numeric variable and coordinate, ``long_name`` on the others;
+no ``_FillValue`` on coordinates; counts as integers). vemwear's numbers carry the
+configuration's consistent units (docs/config.md, 'Units'), so a ``units`` attribute
+names the kind of unit (``"1"`` for dimensionless numbers and counts, ``"s"`` for wall
+time, ``"length"``, ``"stress"``, ... in the configuration's units otherwise).
+
+Dimensions: for a ``grid`` design each axis is a dimension named by its key path made
+an identifier (``contact.kappa`` -> ``contact_kappa``: :func:`axis_name`; the key path
+is its attribute ``config_key``, the list of names ``attrs["axis_variables"]``), so that
+``ds.sel(contact_kappa=2.0)`` works, with the axis values as its coordinate; for
+``zip``, ``lhs`` and ``sobol`` designs the runs are a dimension ``run`` and each axis is
+a coordinate along it. Axis values that are arrays (``mesh.divisions = [16, 8]``)
+become strings (``"[16, 8]"``).
 
 Variables per run (NaN for a failed run):
 
@@ -12,7 +21,8 @@ Variables per run (NaN for a failed run):
 ``worn_volume``     ``sum(omega_a * w_a)`` at T, the worn area (volume per unit depth)
 ``max_pressure``    max of the soft-layer pressure p over every level and node [stress]
 ``max_rigid_pressure``  max of the rigid-layer pressure (``lam`` of ``result.npz``)
-``iterations``      solver iterations summed over the steps
+``iterations``      solver iterations summed over the steps (an integer; -1 for a
+                    failed run)
 ``wall_time``       seconds the run took on its worker (NaN for runs of an earlier
                     execution whose record is lost)
 ``status``          ``done`` or ``failed``; ``error`` the failure's message
@@ -34,6 +44,8 @@ the design and the counts of this execution.
 from __future__ import annotations
 
 import json
+import re
+import shlex
 from collections.abc import Mapping
 from datetime import UTC, datetime
 from pathlib import Path
@@ -46,7 +58,7 @@ from .design import Study
 from .execute import Execution
 from .layout import RUNS_DIR
 
-__all__ = ["SCALARS", "STUDY_NC", "build_dataset", "run_arrays", "write_dataset"]
+__all__ = ["SCALARS", "STUDY_NC", "axis_name", "build_dataset", "run_arrays", "write_dataset"]
 
 STUDY_NC = "study.nc"
 #: The scalar summaries per run.
@@ -58,14 +70,47 @@ SCALARS = (
     "iterations",
     "wall_time",
 )
-_UNITS = {
-    "max_wear": "max of w at T",
-    "worn_volume": "sum of omega_a w_a at T (area: volume per unit depth)",
-    "max_pressure": "max of the soft-layer pressure p over t and s",
-    "max_rigid_pressure": "max of the rigid-layer pressure (lam) over t and s",
-    "iterations": "solver iterations summed over the steps",
-    "wall_time": "seconds of the run on its worker",
+#: (long_name, units) of every variable and coordinate (units: the kind of unit in
+#: the configuration's consistent units; "1" for dimensionless numbers and counts).
+_CF: dict[str, tuple[str, str]] = {
+    "max_wear": ("max of the wear w at the final time T", "length"),
+    "worn_volume": ("sum of omega_a w_a at T: worn area (volume per unit depth)", "length2"),
+    "max_pressure": ("max of the soft-layer pressure p over t and s", "stress"),
+    "max_rigid_pressure": ("max of the rigid-layer pressure (lam) over t and s", "stress"),
+    "iterations": ("solver iterations summed over the steps (-1: failed run)", "1"),
+    "wall_time": ("seconds of the run on its worker", "s"),
+    "status": ("status of the run: done or failed", ""),
+    "error": ("error of a failed run", ""),
+    "run_id": ("directory of the run under OUTDIR/runs", ""),
+    "wear": ("wear w of the soft layer", "length"),
+    "u_nu": ("normal displacement u_nu at the contact nodes", "length"),
+    "p": ("soft-layer pressure p(u_nu - w)", "stress"),
+    "forces": ("force resultant on each boundary part (per unit depth in 2D)", "force"),
+    "time": ("time", "time (the unit of [time] T)"),
+    "s": ("arc length along Gamma_C", "length"),
+    "run": ("run index in the design", "1"),
+    "part": ("boundary part", ""),
+    "component": ("force component", ""),
 }
+#: Units of the configuration keys that studies vary most (others: "see config_key").
+_KEY_UNITS = {
+    "contact.kappa": "1/stress",
+    "contact.mu": "1",
+    "contact.g": "length",
+    "contact.p.c": "stress/length",
+    "material.lam": "stress",
+    "material.eta": "stress",
+    "time.T": "time",
+    "time.steps": "1",
+    "mesh.divisions": "1",
+}
+
+
+def axis_name(key: str) -> str:
+    """The variable name of an axis: its key path made a Python identifier
+    (``contact.kappa`` -> ``contact_kappa``), for ``ds.sel(contact_kappa=...)``."""
+    name = re.sub(r"\W", "_", key)
+    return name if name and not name[0].isdigit() else f"_{name}"
 
 
 def _coord(values: list[Any]) -> NDArray[Any]:
@@ -158,15 +203,24 @@ def build_dataset(study: Study, execution: Execution, out: str | Path) -> Any:
 
     out = Path(out)
     grid = study.kind == "grid"
-    dims: tuple[str, ...] = tuple(study.keys) if grid else ("run",)
+    names = {k: axis_name(k) for k in study.keys}
+    dims: tuple[str, ...] = tuple(names.values()) if grid else ("run",)
     shape = study.shape
     coords: dict[str, Any] = {}
+
+    def axis_attrs(k: str) -> dict[str, str]:
+        return {
+            "long_name": f"configuration key {k}",
+            "config_key": k,
+            "units": _KEY_UNITS.get(k, f"the configuration's unit of {k}"),
+        }
+
     if grid:
-        coords = {k: (k, _coord(v)) for k, v in study.axes.items()}
+        coords = {names[k]: (names[k], _coord(v), axis_attrs(k)) for k, v in study.axes.items()}
     else:
         coords = {"run": ("run", np.arange(len(study.runs)))}
         for k in study.keys:
-            coords[k] = ("run", _coord([r.params[k] for r in study.runs]))
+            coords[names[k]] = ("run", _coord([r.params[k] for r in study.runs]), axis_attrs(k))
 
     def where(index: int) -> tuple[int, ...]:
         return tuple(int(i) for i in np.unravel_index(index, shape))
@@ -193,18 +247,26 @@ def build_dataset(study: Study, execution: Execution, out: str | Path) -> Any:
         scal["max_pressure"][at] = float(np.max(res["p"], initial=0.0))
         scal["max_rigid_pressure"][at] = float(np.max(res["lam"], initial=0.0))
         scal["iterations"][at] = float(np.sum(res["iterations"]))
-    data: dict[str, Any] = {n: (dims, v, {"long_name": _UNITS[n]}) for n, v in scal.items()}
+    iters = np.where(np.isnan(scal["iterations"]), -1, scal["iterations"]).astype(np.int64)
+    data: dict[str, Any] = {n: (dims, v) for n, v in scal.items() if n != "iterations"}
+    data["iterations"] = (dims, iters)
     data.update({n: (dims, v.astype(str)) for n, v in text.items()})
+    created = datetime.now(UTC).isoformat(timespec="seconds")
+    source = str(study.path.resolve()) if study.path is not None else "study data"
     attrs: dict[str, Any] = {
+        "Conventions": "CF-1.10",
+        "history": f"{created}: vemwear {__version__} sweep {shlex.quote(source)}",
+        "source": f"vemwear {__version__}: VEM contact with wear, one run per design point",
         "title": study.title,
         "design": study.kind,
         "axes": json.dumps(study.keys),
+        "axis_variables": json.dumps(list(names.values())),
         "study_file": str(study.path.resolve()) if study.path is not None else "",
         "study": study.text,
         "base_config_file": str(study.base_path.resolve()),
         "base_config": study.base_text,
         "vemwear_version": __version__,
-        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+        "created": created,
         "runs": len(study.runs),
         "runs_computed": execution.computed,
         "runs_skipped": execution.skipped,
@@ -215,7 +277,14 @@ def build_dataset(study: Study, execution: Execution, out: str | Path) -> Any:
         attrs.update(samples=study.samples, seed=study.seed)
     if results:
         _profiles(study, results, dims, shape, where, data, coords, attrs)
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+    ds = xr.Dataset(data, coords=coords, attrs=attrs)
+    for name in ds.variables:
+        long_name, units = _CF.get(str(name), ("", ""))
+        if long_name and "long_name" not in ds[name].attrs:
+            ds[name].attrs["long_name"] = long_name
+        if units and "units" not in ds[name].attrs:
+            ds[name].attrs["units"] = units
+    return ds
 
 
 def _profiles(
@@ -261,6 +330,8 @@ def write_dataset(ds: Any, path: str | Path) -> Path:
     from ..util.atomic import atomic_file
 
     path = Path(path)
+    # no _FillValue on coordinates (CF); the scalars keep NaN for a failed run
+    encoding = {str(c): {"_FillValue": None} for c in ds.coords}
     with atomic_file(path) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf")
+        ds.to_netcdf(tmp, engine="h5netcdf", encoding=encoding)
     return path

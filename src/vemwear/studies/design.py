@@ -36,7 +36,7 @@ import math
 import os
 import tomllib
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -47,7 +47,17 @@ from ..config import ConfigError
 from ..util.hashing import sha256_json
 from . import _toml
 
-__all__ = ["KINDS", "RunSpec", "Study", "StudyError", "expand", "load_study", "params_text"]
+__all__ = [
+    "KINDS",
+    "MAX_RUNS",
+    "RunSpec",
+    "Study",
+    "StudyError",
+    "count_runs",
+    "expand",
+    "load_study",
+    "params_text",
+]
 
 #: The kinds of design.
 KINDS = ("grid", "zip", "lhs", "sobol")
@@ -309,11 +319,26 @@ def _absolute_mesh(data: dict[str, Any], base_dir: Path) -> dict[str, Any]:
     return data
 
 
+#: The most runs a study may have unless asked for more (``vemwear sweep --max-runs``).
+MAX_RUNS = 100_000
+
+
+def count_runs(kind: str, axes: Mapping[str, Any], samples: int) -> int:
+    """The number of runs of a design, without expanding it."""
+    if kind == "grid":
+        return math.prod(len(v) for v in axes.values())
+    if kind == "zip":
+        return len(next(iter(axes.values())))
+    return samples
+
+
 def load_study(
     study: str | os.PathLike[str] | Mapping[str, Any],
     *,
     base_dir: str | os.PathLike[str] | None = None,
     validate: bool = True,
+    max_runs: int = MAX_RUNS,
+    say: Callable[[str], None] | None = None,
 ) -> Study:
     """Read a study, expand its design and validate every run.
 
@@ -326,6 +351,10 @@ def load_study(
         For study data only.
     validate : bool
         Build every run's problem (:func:`vemwear.config.parse_config`); default True.
+    max_runs : int
+        Refuse a design of more runs (counted before any run is built).
+    say : callable, optional
+        Receives a line before a long validation (more than 1000 runs).
 
     Returns
     -------
@@ -336,7 +365,7 @@ def load_study(
     StudyError
         For an invalid study, or the first invalid run (its parameters and key path).
     """
-    from ..config import apply_overrides, parse_config
+    from ..util.text import NotUtf8Error, read_utf8
 
     if isinstance(study, Mapping):
         path, src, raw = None, "study", dict(study)
@@ -346,8 +375,10 @@ def load_study(
         path = Path(study)
         src = str(path)
         try:
-            text = path.read_text(encoding="utf-8")
+            text = read_utf8(path)
             raw = tomllib.loads(text)
+        except NotUtf8Error as exc:
+            raise StudyError(f"{src}: {exc}") from None
         except OSError as exc:
             raise StudyError(f"{src}: cannot read the study file: {exc.strerror or exc}") from None
         except tomllib.TOMLDecodeError as exc:
@@ -364,8 +395,10 @@ def load_study(
     base_path = Path(raw["base"]).expanduser()
     base_path = base_path if base_path.is_absolute() else here / base_path
     try:
-        base_text = base_path.read_text(encoding="utf-8")
+        base_text = read_utf8(base_path)
         base = tomllib.loads(base_text)
+    except NotUtf8Error as exc:
+        raise StudyError(f"{src}: base {base_path}: {exc}") from None
     except OSError as exc:
         raise StudyError(f"{src}: base {raw['base']!r}: cannot read {base_path}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
@@ -375,10 +408,22 @@ def load_study(
     if not isinstance(overrides, Mapping):
         raise StudyError(f"{src}: [overrides] must be a table of dotted key paths")
     title = raw.get("title", path.stem if path is not None else "study")
+    axes = _axes(src, raw.get("axes"), kind)
+    n_runs = count_runs(kind, axes, samples)
+    if n_runs > max_runs:
+        shape = " x ".join(str(len(v)) for v in axes.values()) if kind == "grid" else kind
+        raise StudyError(
+            f"{src}: the design has {n_runs} runs ({shape}), more than --max-runs = "
+            f"{max_runs}; use fewer values per axis, or raise --max-runs"
+        )
+    if say is not None and validate and n_runs > 1000:
+        say(f"vemwear: {src}: {n_runs} runs ({kind}); validating each before any starts")
+    from ..config import apply_overrides, parse_config  # after the cheap refusals
+
     out = Study(
         path=path,
         base_path=base_path,
-        axes=_axes(src, raw.get("axes"), kind),
+        axes=axes,
         kind=kind,
         samples=samples,
         seed=seed,

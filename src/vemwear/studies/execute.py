@@ -61,6 +61,26 @@ LOCAL_WORKERS: dict[str, Any] = {
 }
 
 
+def _active_client(say: Callable[[str], None] | None) -> Any:
+    """The user's active ``distributed.Client`` in this process (``default_client()``),
+    or None: a study then runs on it instead of starting a cluster of its own."""
+    import sys
+
+    if "distributed" not in sys.modules:  # no client can be active without it
+        return None
+    from distributed import default_client
+
+    try:
+        client = default_client()
+    except ValueError:  # no client
+        return None
+    if client.status != "running":
+        return None
+    if say is not None:
+        say(f"vemwear: using the active Dask client (scheduler {client.scheduler.address})")
+    return client
+
+
 @contextlib.contextmanager
 def study_client(
     client: Any = None,
@@ -70,9 +90,12 @@ def study_client(
     say: Callable[[str], None] | None = None,
 ) -> Iterator[Any]:
     """A Dask client for a study: ``client`` as it is, one connected to ``scheduler``,
-    or an embedded ``LocalCluster`` of ``workers`` (default ``os.cpu_count()``) processes
+    the user's active client in this process (``distributed.default_client()``, said to
+    ``say``), or an embedded ``LocalCluster`` of ``workers`` (default ``os.cpu_count()``) processes
     with one thread each, on 127.0.0.1. Clients and clusters made here are closed at the
     end; the dashboard address is passed to ``say``."""
+    if client is None and scheduler is None:
+        client = _active_client(say)
     if client is not None:
         yield client
         return

@@ -23,6 +23,7 @@ is ``s^2 (J^T J)^-1`` with ``s^2 = |r|^2 / (n - p)``, and the 95 % intervals are
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
@@ -86,10 +87,13 @@ def read_measured(path: str | os.PathLike[str]) -> Measured:
     StudyError
         Naming the file, the line and the problem.
     """
+    from ..util.text import NotUtf8Error, read_utf8
+
     src = str(path)
     try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            rows = list(csv.reader(fh))
+        rows = list(csv.reader(io.StringIO(read_utf8(path), newline="")))
+    except NotUtf8Error as exc:
+        raise StudyError(f"{src}: {exc}") from None
     except OSError as exc:
         raise StudyError(f"{src}: cannot read the data: {exc.strerror or exc}") from None
     rows = [r for r in rows if r and not r[0].lstrip().startswith("#")]
@@ -308,6 +312,32 @@ def _check_data(m: Measured, data: Mapping[str, Any], src: str) -> None:
         )
     if m.w.size <= 0:
         raise StudyError(f"{m.source}: no data")
+    cb = cfg.problem.contact
+    a = np.asarray(cb.points[:, 0] if m.abscissa == "x" else cb.s, dtype=np.float64)
+    lo, hi = float(a.min()), float(a.max())
+    tol = 1e-9 * max(hi - lo, 1.0)
+    off = (m.a < lo - tol) | (m.a > hi + tol)
+    if np.any(off):  # np.interp would clamp it to the end value
+        i = int(np.flatnonzero(off)[0])
+        raise StudyError(
+            f"{m.source}: data point {i + 1} at {m.abscissa} = {m.a[i]:g} is off the contact "
+            f"part: its contact nodes, where the model's wear is known, span {m.abscissa} = "
+            f"{lo:g} .. {hi:g}"
+        )
+
+
+def interval95(
+    value: float, stderr: float, q: float, low: float, high: float
+) -> tuple[float, float]:
+    """The 95 % interval of a positive parameter: by the delta method in its logarithm
+    (``value * exp(+-q stderr / value)``, so never below 0: a linear interval of mu
+    reached -0.68), clipped to the bounds ``[low, high]``."""
+    if value > 0 and math.isfinite(stderr):
+        f = math.exp(min(q * stderr / value, 700.0))
+        a, b = value / f, value * f
+    else:  # at the lower bound 0
+        a, b = value - q * stderr, value + q * stderr
+    return max(a, low), min(b, high)
 
 
 def fit(
@@ -370,9 +400,11 @@ def fit(
     unknown = [p for p in names if p not in PARAMETERS]
     if unknown or not names:
         raise StudyError(f"--params {unknown or list(params)}: choose from {', '.join(PARAMETERS)}")
+    from ..util.text import read_utf8
+
     try:
-        base = tomllib.loads(Path(config).read_text(encoding="utf-8"))
-    except (OSError, tomllib.TOMLDecodeError) as exc:
+        base = tomllib.loads(read_utf8(config))
+    except (OSError, ValueError) as exc:
         raise StudyError(f"{src}: cannot read the configuration: {exc}") from None
     from ..config import apply_overrides
     from .design import _absolute_mesh
@@ -392,8 +424,11 @@ def fit(
     if errors not in ("relative", "absolute"):
         raise StudyError(f"errors must be 'relative' or 'absolute', got {errors!r}")
     weight = 1.0 / m.scale(errors)
-    if m.w.size < len(names):
-        raise StudyError(f"{m.source}: {m.w.size} data points for {len(names)} parameters")
+    if m.w.size <= len(names):  # no residual variance: a zero-width interval
+        raise StudyError(
+            f"{m.source}: {m.w.size} data points for {len(names)} parameters; a fit needs more "
+            "points than parameters (for the residual variance and the intervals)"
+        )
     tmp = None if out is not None else Path(tempfile.mkdtemp(prefix="vemwear-fit-"))
     target = Path(out) if out is not None else Path(str(tmp)) / "fit"
     outdir = open_study_dir(target, "fit", [config])
@@ -446,8 +481,8 @@ def fit(
             initial={k: float(v) for k, v in zip(names, x0, strict=True)},
             stderr={k: float(v) for k, v in zip(names, se, strict=True)},
             interval={
-                k: (float(v - q * e), float(v + q * e))
-                for k, v, e in zip(names, sol.x, se, strict=True)
+                k: interval95(float(v), float(e), q, float(a), float(b))
+                for k, v, e, a, b in zip(names, sol.x, se, lo, hi, strict=True)
             },
             residuals=final - m.w,
             fitted=final,

@@ -47,7 +47,7 @@ def plot_summary(ds: Any, path: str | Path) -> Path:
     """Each scalar of :data:`PLOTTED` against each axis, in one figure."""
     from matplotlib.figure import Figure
 
-    keys: list[str] = json.loads(ds.attrs["axes"])
+    keys: list[str] = json.loads(ds.attrs.get("axis_variables", ds.attrs["axes"]))
     grid = ds.attrs["design"] == "grid"
     rows, cols = len(PLOTTED), len(keys)
     fig = Figure(figsize=(3.6 * cols + 0.8, 2.2 * rows + 0.6), layout="constrained")
@@ -88,7 +88,7 @@ def plot_profiles(ds: Any, path: str | Path) -> Path | None:
     from matplotlib import colormaps
     from matplotlib.figure import Figure
 
-    keys: list[str] = json.loads(ds.attrs["axes"])
+    keys: list[str] = json.loads(ds.attrs.get("axis_variables", ds.attrs["axes"]))
     dims = [d for d in ds["wear"].dims if d not in ("time", "s", "node")]
     w = ds["wear"].isel(time=-1).stack(_run=dims).transpose("_run", ...)
     first = np.asarray(ds[keys[0]].broadcast_like(ds["max_wear"]).stack(_run=dims).values)
@@ -123,7 +123,7 @@ def _num(x: Any) -> str:
 
 def write_report(ds: Any, path: str | Path, figures: list[Path]) -> Path:
     """``report.md``: the design, the counts, a table of the runs, failures, figures."""
-    keys: list[str] = json.loads(ds.attrs["axes"])
+    keys: list[str] = json.loads(ds.attrs.get("axis_variables", ds.attrs["axes"]))
     dims = list(ds["max_wear"].dims)
     flat = ds.stack(_run=dims) if dims else ds
     cols = ["run", *keys, "status", "max_wear", "worn_volume", "max_pressure", "iterations"]

@@ -1,0 +1,101 @@
+"""Stop signals in real processes: never lost in a finalizer, a stop within 2 s.
+
+A signal handler that raises inside a finalizer (``weakref.finalize``, as PARDISO's
+handles use) has its exception printed and swallowed by Python, and the run goes on.
+These tests send real signals to real processes at instants where that happened.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from conftest import small_config
+
+SRC = str(Path(__file__).resolve().parents[1] / "src")
+
+FINALIZER = textwrap.dedent(
+    """
+    import os, signal, sys, time, weakref
+    from vemwear.runner.signals import signals_as_interrupts
+
+    class Handle:
+        pass
+
+    def release():
+        os.kill(os.getpid(), signal.SIG{sig})  # the signal lands inside the finalizer
+        t = time.monotonic()
+        while time.monotonic() - t < 0.3:  # Python code runs there: the handler too
+            pass
+
+    t0 = time.monotonic()
+    try:
+        with signals_as_interrupts():
+            h = Handle()
+            weakref.finalize(h, release)
+            del h
+            while time.monotonic() - t0 < 20:  # the run goes on after the finalizer
+                sum(range(1000))
+        print("not stopped")
+    except KeyboardInterrupt as exc:
+        print(f"stopped by {{type(exc).__name__}} after {{time.monotonic() - t0:.3f}} s")
+    """
+)
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = SRC + os.pathsep + env.get("PYTHONPATH", "")
+    return env
+
+
+@pytest.mark.parametrize("sig", ["TERM", "INT", "HUP"])
+def test_a_signal_inside_a_finalizer_stops_the_process(tmp_path: Path, sig: str) -> None:
+    script = tmp_path / "finalizer.py"
+    script.write_text(FINALIZER.format(sig=sig))
+    done = subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, timeout=60, env=_env()
+    )
+    assert "Exception ignored" not in done.stderr, done.stderr
+    assert done.stdout.startswith("stopped by "), done.stdout + done.stderr
+    name = "KeyboardInterrupt" if sig == "INT" else "Terminated"
+    assert f"stopped by {name} after" in done.stdout
+    assert float(done.stdout.split()[-2]) < 2.0  # just after the finalizer's 0.3 s
+
+
+def test_sigterm_stops_newton_full_within_two_seconds(tmp_path: Path) -> None:
+    """SIGTERM at instants spread over import, set-up and the levels of the full-space
+    Newton with PARDISO-like finalized handles: exit 130 (or the default action before
+    the handlers exist) within 2 s, never a run that goes on."""
+    cfg = tmp_path / "long.toml"
+    cfg.write_text(
+        small_config(
+            "long",
+            divisions=(32, 16),
+            steps=4000,
+            solver={"method": "newton-full"},
+            output={"checkpoint": 0.3},
+        )
+    )
+    for i, delay in enumerate((0.05, 0.4, 0.9, 1.5, 2.2, 3.0)):
+        out = tmp_path / f"out{i}"
+        cmd = [sys.executable, "-m", "vemwear", "run", str(cfg), "-o", str(out), "--no-progress"]
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_env())
+        time.sleep(delay)
+        t_sig = time.monotonic()
+        proc.send_signal(signal.SIGTERM)
+        try:
+            _, err = proc.communicate(timeout=20)
+        finally:
+            proc.kill()
+        took = time.monotonic() - t_sig
+        assert proc.returncode in (130, -signal.SIGTERM), err
+        assert b"Exception ignored" not in err, err
+        assert took < 2.0, (delay, took, err)
