@@ -125,8 +125,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         return EXIT_OK
     if plan.note:
         say(f"{PROG}: {plan.note}")
-    try:  # assembles the stiffness: may fail before any level, like the run
-        _, warning = smallness_report(cfg.problem)
+    try:  # assembles and factorizes (the run's set-up): may fail before any level
+        _, warning = smallness_report(cfg.problem, plan.solver)
         for w in [warning, *_overshoot(cfg)]:
             if w:
                 say(f"{PROG}: warning: {w}")
@@ -195,7 +195,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     if not args.force_size:  # the memory of the real mesh, as ``vemwear run`` checks it
         check_estimate(est, None, str(args.config))
     rows = check_rows(cfg)
-    row, warning = smallness_report(cfg.problem)
+    row, warning = smallness_report(cfg.problem, cfg.solver)
     rows.append(("smallness (Thm 3.4)", row))
     rows += est.rows()
     print(f"{PROG}: {args.config}: {cfg.title}: valid\n" + rows_text(rows))

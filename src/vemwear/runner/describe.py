@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from numpy.typing import NDArray
 
     from ..config import Config
-    from ..simulate import Problem, Result
+    from ..simulate import Problem, Result, SolverOptions
 
 __all__ = ["check_rows", "format_k", "part_wear_rows", "result_rows", "smallness_report"]
 
@@ -31,15 +31,23 @@ def format_k(k_min: float, k_max: float) -> str:
     return f"k in [{k_min:.6g}, {k_max:.6g}]"
 
 
-def smallness_report(problem: Problem, max_dofs: int = 200_000) -> tuple[str, str | None]:
+def smallness_report(
+    problem: Problem, solver: SolverOptions | None = None, max_dofs: int = 200_000
+) -> tuple[str, str | None]:
     """The smallness condition of Theorem 3.4, estimated for ``vemwear check`` and ``run``.
 
     Parameters
     ----------
     problem : Problem
         A validated problem (its discretization is assembled here).
+    solver : SolverOptions, optional
+        The run's solver: its step solver is built here (the run's set-up, which the
+        run then reuses) and the estimate takes the block of ``K^{-1}`` on the contact
+        dofs from its factorization (:meth:`~vemwear.simulate.Discretization.
+        smallness_estimate`).
     max_dofs : int
-        Skip the estimate (an eigenvalue problem) above this number of dofs.
+        Without ``solver``, skip the estimate (a factorization of its own) above this
+        number of dofs.
 
     Returns
     -------
@@ -48,11 +56,15 @@ def smallness_report(problem: Problem, max_dofs: int = 200_000) -> tuple[str, st
     warning : str or None
         A warning when the condition is doubtful (estimate >= 1), else None.
     """
-    if problem.dim * problem.mesh.n_points > max_dofs:
+    if len(problem.rigid_basis):  # Theorem 3.4 takes a coercive a_h (clamped Gamma_D)
+        return "not applicable (load control: contact holds the body)", None
+    if solver is None and problem.dim * problem.mesh.n_points > max_dofs:
         return f"not estimated (more than {max_dofs} dofs)", None
+    d = problem.discrete
+    step_solver = None if solver is None else d.step_solver(solver)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        est = problem.discrete.smallness_estimate()
+        est = d.smallness_estimate(step_solver)
     r = float(est.get("ratio", float("nan")))
     if not math.isfinite(r):
         return "not estimated", None

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import time
 import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, cast
@@ -84,6 +85,7 @@ class Discretization:
     """
 
     def __init__(self, problem: Problem) -> None:
+        tick = time.perf_counter()
         mesh = problem.mesh
         self.problem = problem
         self.contact: ContactBoundary = problem.contact
@@ -164,6 +166,11 @@ class Discretization:
         self._sliding_at: _Sliding | None = None
         self._sliding_prev: _Sliding | None = None
         self._K_cc = sp.csr_matrix((0, 0))
+        #: wall seconds of the phases done on this discretization: ``assembly`` (this
+        #: constructor), ``setup`` (the step solvers' factorizations), ``smallness``
+        #: (:meth:`smallness_estimate`); the time loop reports them as they were spent,
+        #: whoever asked first
+        self.timings: dict[str, float] = {"assembly": time.perf_counter() - tick}
 
     def _contact_offset(self, cdofs: NDArray[np.int64]) -> NDArray[np.float64]:
         """``nu_a . u_c`` at the contact nodes from their prescribed components, which
@@ -220,7 +227,9 @@ class Discretization:
         """The step solver of ``opts`` on this system, built once (one factorization of
         K however many runs use it, e.g. the cycles of a cycle jump)."""
         if opts not in self._solvers:
+            tick = time.perf_counter()
             self._solvers[opts] = opts.build(self.system)
+            self.timings["setup"] = time.perf_counter() - tick
         return self._solvers[opts]
 
     def release_solvers(self) -> None:
@@ -536,24 +545,57 @@ class Discretization:
         :meth:`full_dofs`; all dofs for k = 1)."""
         return self.space.vertex_values(self.full_dofs(u_free, t))
 
-    def smallness_estimate(self) -> dict[str, float]:
+    def smallness_estimate(self, solver: Any = None) -> dict[str, float]:
         """Estimate of the smallness condition of Theorem 3.4, ``c_0^2 L_p ||mu|| < C_1``.
 
-        ``C_1 / c_0^2`` is the smallest generalized eigenvalue of ``a_h(v, v)`` against
-        ``||v||^2_{L^2(Gamma_C)}`` (nodal quadrature) on the free dofs; the condition
-        reads ``L_p ||mu||_inf * (c_0^2 / C_1) < 1``.
+        ``c_0^2 / C_1`` is the largest generalized eigenvalue of
+        ``||v||^2_{L^2(Gamma_C)}`` (nodal quadrature, normal and tangential) against
+        ``a_h(v, v)`` on the free dofs; the condition reads ``L_p ||mu||_inf (c_0^2 /
+        C_1) < 1``. With ``B = [N; Tau]`` and the weights ``W`` that eigenvalue is the
+        largest one of ``W^(1/2) B K^{-1} B^T W^(1/2)``, in which ``B K^{-1} B^T`` needs
+        only the block of ``K^{-1}`` on the contact dofs: the step solver's own Schur
+        factorization gives it, so the estimate costs a few dense products instead of a
+        second factorization of K.
+
+        Parameters
+        ----------
+        solver : step solver, optional
+            A step solver of this discretization (:meth:`step_solver`) whose
+            ``factor.S_inv`` is that block (the condensed Newton's); otherwise a Schur
+            factorization is made here with the fastest backend.
         """
         import scipy.sparse.linalg as spla
 
+        from ..solvers.backends import schur_factorize
+
+        tick = time.perf_counter()
         s = self.system
-        Mc = (
-            s.N.T @ sp.diags(s.weights) @ s.N + s.Tau.T @ sp.diags(s.tile_rows(s.weights)) @ s.Tau
-        ).tocsc()
+        if s.rigid is not None:  # load control: a_h is not coercive (docs/method.md 1c)
+            return {"ratio": float("nan")}
+        if s.contact_dofs is None:  # the order of the condensed solver's Schur block
+            cols = s.contact_cols
+        else:
+            cd = np.asarray(s.contact_dofs).ravel()
+            cols = cd[cd >= 0]
+        S_inv = getattr(getattr(solver, "factor", None), "S_inv", None)
+        if S_inv is None or S_inv.shape != (len(cols), len(cols)):
+            S_inv = schur_factorize(s.K, cols, s.dof_points).S_inv
+        sw = np.sqrt(np.concatenate([s.weights, s.tile_rows(s.weights)]))
+        B = sp.vstack([s.N[:, cols], s.Tau[:, cols]]).tocsr()
+        Bt = B.T.tocsr()
+
+        def mv(x: NDArray[np.float64]) -> NDArray[np.float64]:
+            x = np.ravel(x)
+            return cast("NDArray[np.float64]", sw * (B @ (S_inv @ (Bt @ (sw * x)))))
+
+        op = spla.LinearOperator((len(sw), len(sw)), matvec=mv, dtype=np.float64)
         try:
-            vals = spla.eigsh(Mc, k=1, M=s.K.tocsc(), which="LA", return_eigenvectors=False)
+            vals = spla.eigsh(op, k=1, which="LA", return_eigenvectors=False)
             ratio = float(vals[0])  # max of ||v||^2_Gc / a_h(v, v) = c_0^2 / C_1
         except Exception:
             return {"ratio": float("nan")}
+        finally:
+            self.timings["smallness"] = time.perf_counter() - tick
         Lp = float(self.problem.law.lipschitz)
         value = Lp * float(np.abs(self.mu).max(initial=0)) * ratio
         if np.isfinite(value) and value >= 1.0:

@@ -63,8 +63,10 @@ __all__ = [
     "stiffness3d",
 ]
 
-#: Cells per batch of local matrices in :func:`stiffness3d`.
-CHUNK3 = 2048
+#: Cells per batch of local matrices in :func:`stiffness3d`: small batches reuse their
+#: temporaries (a few MB) instead of mapping fresh ones, whose page faults cost more
+#: than the arithmetic (as :data:`vemwear.vem.assembly.CHUNK` in 2D).
+CHUNK3 = 256
 
 #: The Levi-Civita symbol.
 LEVI_CIVITA = np.zeros((3, 3, 3))
@@ -146,6 +148,17 @@ class LocalProjection3D(NamedTuple):
     gradient: NDArray[np.float64]  # (m, 3, 3, n, 3): G_ab likewise (strain + rotation)
 
 
+def _cross_weights(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``out[m, p, i, c] = eps_pac v[m, i, a]``: the weights of ``u_i`` in ``v_i x u_i``,
+    written entry by entry (each a single term, as the sum over a gives it)."""
+    m, n, _ = v.shape
+    out = np.zeros((m, 3, n, 3))
+    for p, a, c in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        out[:, p, :, c] = v[:, :, a]
+        out[:, p, :, a] = -v[:, :, c]
+    return out
+
+
 def local_projection3d(
     X: NDArray[np.float64], q: NDArray[np.float64], volume: NDArray[np.float64]
 ) -> LocalProjection3D:
@@ -157,17 +170,32 @@ def local_projection3d(
         Vertex coordinates and cell vertex normal weights.
     volume : (m,) array
     """
+    m, n, _ = X.shape
     xbar = X.mean(axis=1)
     d = X - xbar[:, None, :]
     qa = q / volume[:, None, None]
-    eye = np.eye(3)
-    Ew = 0.5 * (np.einsum("ac,mib->mabic", eye, qa) + np.einsum("bc,mia->mabic", eye, qa))
-    S = np.einsum("mia,mib->mab", d, d)
-    M = np.trace(S, axis1=1, axis2=2)[:, None, None] * eye - S
-    C = np.einsum("pac,mia->mpic", LEVI_CIVITA, d)  # sum_i d_i x v_i
-    T = np.einsum("pab,mbcix,mca->mpix", LEVI_CIVITA, Ew, S)  # sum_i d_i x E d_i
-    omega = np.linalg.solve(M, (C - T).reshape(len(X), 3, -1)).reshape(C.shape)
-    Gw = Ew + np.einsum("apb,mpix->mabix", LEVI_CIVITA, omega)
+    # Ew[:, a, b, i, c] = (delta_ac qa_ib + delta_bc qa_ia) / 2, entry by entry
+    half = 0.5 * qa.transpose(0, 2, 1)  # (m, 3, n)
+    Ew = np.zeros((m, 3, 3, n, 3))
+    for c in range(3):
+        Ew[:, c, :, :, c] += half
+        Ew[:, :, c, :, c] += half
+    S = np.matmul(d.transpose(0, 2, 1), d)
+    M = np.trace(S, axis1=1, axis2=2)[:, None, None] * np.eye(3) - S
+    C = _cross_weights(d)  # sum_i d_i x v_i
+    # sum_j d_j x E d_j with E = sym(sum_i v_i (x) qa_i): the weight of v_i is
+    # (1/2) [(S qa_i) x . + eps_pab S_ax qa_ib] (sum_j d_j x (qa_i (d_j . v_i)) =
+    # (S-weighted) qa_i): two small products instead of a five-index sum
+    Z = np.zeros((m, 3, 3, 3))  # Z[:, p, b, x] = eps_pab S_ax
+    for p, a, b in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        Z[:, p, b] = S[:, a]
+        Z[:, p, a] = -S[:, b]
+    T = 0.5 * (_cross_weights(np.matmul(qa, S)) + np.matmul(qa[:, None], Z))
+    omega = np.linalg.solve(M, (C - T).reshape(m, 3, -1)).reshape(C.shape)
+    Gw = Ew.copy()  # + W(omega): Gw[:, a, b] += eps_apb omega_p
+    for a, p, b in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        Gw[:, a, b] += omega[:, p]
+        Gw[:, b, a] -= omega[:, p]
     return LocalProjection3D(xbar, d, Ew, Gw)
 
 
@@ -205,10 +233,27 @@ def element_matrices3d(
     B = np.stack([(1.0 if a == b else 2.0) * Ew[:, a, b] for a, b in VOIGT], axis=1)
     K = np.matmul(B.transpose(0, 2, 1), np.einsum("ij,mjk->mik", elasticity_matrix(material), B))
     K *= volume[:, None, None]
-    P = np.einsum("mjb,mabix->mjaix", lp.rel, lp.gradient).reshape(m, 3 * n, 3 * n)
-    P += np.kron(np.ones((n, n)), np.eye(3)) / n  # the vertex average (3.9)
-    IP = np.eye(3 * n) - P
-    S = np.matmul(IP.transpose(0, 2, 1), IP)
+    # P = U V has rank 12: U (3n, 12) the values at the vertices of the vertex average
+    # and of the gradient (rows j a: delta_ac, d_jb delta_aa'), V (12, 3n) their weights
+    # on the dofs, so (I - P)^T (I - P) = I - P - P^T + V^T (U^T U) V costs O(n^2), not
+    # the O(n^3) of the product of two 3n x 3n matrices
+    V = np.concatenate(
+        [
+            np.broadcast_to(np.tile(np.eye(3), n) / n, (m, 3, 3 * n)),
+            lp.gradient.reshape(m, 9, 3 * n),
+        ],
+        axis=1,
+    )
+    U4 = np.zeros((m, n, 3, 12))
+    U4[:, :, np.arange(3), np.arange(3)] = 1.0
+    for a in range(3):
+        U4[:, :, a, 3 + 3 * a : 6 + 3 * a] = lp.rel
+    U = U4.reshape(m, 3 * n, 12)
+    P = np.matmul(U, V)
+    S = np.matmul(V.transpose(0, 2, 1), np.matmul(np.matmul(U.transpose(0, 2, 1), U), V))
+    S -= P
+    S -= P.transpose(0, 2, 1)
+    S[:, np.arange(3 * n), np.arange(3 * n)] += 1.0
     if stabilization == "trace":
         s = np.trace(K, axis1=1, axis2=2) / (3 * n)
     else:
@@ -243,14 +288,14 @@ def stiffness3d(
         for a in range(0, len(ids), CHUNK3):
             sl = slots[a : a + CHUNK3]
             v = cg.vertices[sl]
-            K = element_matrices3d(
+            size = len(v) * n3 * n3
+            vals[at : at + size].reshape(len(v), n3, n3)[...] = element_matrices3d(
                 mesh.points[v], cg.q[sl], cg.volume[ids[a : a + CHUNK3]], material, stabilization
             )[0]
-            size = K.size
-            vals[at : at + size] = K.ravel()
-            d = (3 * v[:, :, None] + np.arange(3)).reshape(len(v), n3).astype(index)
-            rows[at : at + size] = np.repeat(d, n3, axis=1).ravel()
-            cols[at : at + size] = np.tile(d, (1, n3)).ravel()
+            d = (3 * v[:, :, None] + np.arange(3, dtype=index)).reshape(len(v), n3)
+            # entry (i, j) of a cell's matrix: row dof i, column dof j (broadcast in place)
+            rows[at : at + size].reshape(len(v), n3, n3)[...] = d[:, :, None]
+            cols[at : at + size].reshape(len(v), n3, n3)[...] = d[:, None, :]
             at += size
     A = sp.coo_matrix((vals, (rows, cols)), shape=(ndof, ndof)).tocsr()
     A.sum_duplicates()
