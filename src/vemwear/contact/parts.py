@@ -102,7 +102,7 @@ def tangential_velocity(
     tangents: NDArray[np.float64],
     t: float,
 ) -> NDArray[np.float64]:
-    """``v*(t) . tau_a`` at every contact node, with the v* of the node's part.
+    """``v*(t) · tau_a`` at every contact node, with the v* of the node's part.
 
     The tangential part of the foundation velocity is ``v*_tau = (v* . tau_a) tau_a``
     in 2D; its sign gives the friction direction ``n* = -v*_tau / |v*_tau|`` and its

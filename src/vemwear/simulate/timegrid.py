@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 @dataclass(frozen=True, eq=False)
 class TimeGrid:
-    """Time levels ``0 = t_0 < t_1 < ... < t_N = T``; ``k_n = t_{n+1} - t_n``.
+    """Time levels ``0 = t_0 < t_1 < … < t_N = T``; ``k_n = t_{n+1} - t_n``.
 
     Build one with :meth:`uniform`, :meth:`from_steps` or :meth:`pattern`, or from the
     levels themselves.
