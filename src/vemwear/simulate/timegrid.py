@@ -30,6 +30,18 @@ class TimeGrid:
     ValueError
         If the levels are empty, not finite, do not start at 0 or do not increase
         strictly (the message names the offending pair).
+
+    Examples
+    --------
+    >>> from vemwear import TimeGrid
+    >>> TimeGrid.uniform(T=1.0, steps=4).t
+    array([0.  , 0.25, 0.5 , 0.75, 1.  ])
+    >>> TimeGrid.from_steps([0.25, 0.25, 0.5]).k
+    array([0.25, 0.25, 0.5 ])
+    >>> TimeGrid([0.0, 0.5, 0.4])
+    Traceback (most recent call last):
+    ...
+    ValueError: time grid: levels must increase strictly (t[1] = 0.5, t[2] = 0.4)
     """
 
     t: NDArray[np.float64]
