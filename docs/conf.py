@@ -21,6 +21,7 @@ sys.path.insert(0, str(ROOT / "src"))
 
 from _ext.api_pages import write_api_pages  # noqa: E402
 from _ext.config_reference import write_config_reference  # noqa: E402
+from _ext.figure_scraper import ReturnedFigures  # noqa: E402
 
 import vemwear  # noqa: E402
 
@@ -101,7 +102,7 @@ sphinx_gallery_conf = {
     "examples_dirs": ["gallery"],
     "gallery_dirs": ["auto_examples"],
     "filename_pattern": r"/plot_",
-    "within_subsection_order": "FileNameSortKey",
+    "within_subsection_order": "_ext.gallery_order.ExampleOrder",
     "download_all_examples": False,
     "remove_config_comments": True,
     "reset_modules": ("matplotlib",),
@@ -111,7 +112,8 @@ sphinx_gallery_conf = {
     "min_reported_time": 1,
     "abort_on_example_error": True,
     "plot_gallery": "True",
-    "image_scrapers": ("matplotlib",),
+    # returned figures first: pyplot's scraper closes its figures, which then look alike
+    "image_scrapers": (ReturnedFigures(), "matplotlib"),
 }
 
 # ----------------------------------------------------------------------------- HTML
