@@ -233,3 +233,63 @@ def test_pin_on_disc_wears_faster_on_the_outer_side() -> None:
     x = res.contact_points[:, 0]
     w = res.wear[-1]
     assert w[x > 0.2].mean() > 1.1 * w[x < -0.2].mean()
+
+
+# ----------------------------------------------------------------------------- gallery
+GALLERY = ROOT / "docs" / "gallery"
+
+#: Each gallery script (docs/gallery, executed when the documentation site is built)
+#: pins one number: script -> (global name, value, relative tolerance).
+PINNED: dict[str, tuple[str, float, float]] = {
+    "plot_example_5_2.py": ("max_wear_set2", 0.0989606172, 1e-6),
+    "plot_example_5_3.py": ("max_difference", 0.00249676106, 1e-5),
+    "plot_example_5_4.py": ("max_wear_voronoi", 0.0551279608, 1e-6),
+    "plot_example_5_5.py": ("wear_order", 1.37837546, 1e-5),
+    "plot_punch.py": ("max_wear", 0.00892077417, 1e-6),
+    "plot_block_displacement.py": ("max_difference", 0.0, 1e-14),  # absolute
+    "plot_fretting.py": ("max_wear", 0.00401160541, 1e-6),
+    "plot_3d.py": ("max_wear", 0.0578112114, 1e-6),
+    "plot_orders_k2.py": ("u_error_k2_h4", 0.0328152867, 1e-6),
+    "plot_sweep.py": ("max_wear", 0.0985703257, 1e-6),
+    "plot_fit.py": ("kappa", 4.96341836, 1e-4),  # least squares to its tolerance
+}
+
+
+def test_every_gallery_script_pins_a_number() -> None:
+    scripts = sorted(p.name for p in GALLERY.glob("plot_*.py"))
+    assert scripts == sorted(PINNED)
+    for name in scripts:
+        text = (GALLERY / name).read_text(encoding="utf-8")
+        doc = text.split('"""')[1]
+        title = doc.strip().splitlines()
+        assert set(title[1]) == {"="} and len(title[1]) == len(title[0]), name
+        assert "It shows" in doc and "Pinned" in doc, f"{name}: say what it shows and pins"
+
+
+@pytest.mark.parametrize("name", sorted(PINNED))
+def test_gallery_script_runs_and_gives_its_number(name: str) -> None:
+    """The script as sphinx-gallery runs it (``__name__ == "__main__"``), figures on Agg."""
+    import runpy
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    key, value, rtol = PINNED[name]
+    try:
+        found = runpy.run_path(str(GALLERY / name), run_name="__main__")
+        assert plt.get_fignums(), f"{name}: no figure"
+    finally:
+        plt.close("all")
+    if name == "plot_example_5_2.py":  # the paper's findings: more wear with kappa, mu slight
+        w = found["max_wear"]
+        assert w["set2"] > 1.5 * w["set1"] and abs(w["set3"] - w["set2"]) < 1e-3 * w["set2"]
+        found["max_wear_set2"] = w["set2"]
+    if name == "plot_fit.py":  # the true kappa is inside the 95 % interval
+        assert found["lo"] < 5.0 < found["hi"] and found["result"].success
+    got = float(found[key])
+    if value == 0.0:
+        assert abs(got) <= rtol, f"{name}: {key} = {got:.3e}"
+    else:
+        assert got == pytest.approx(value, rel=rtol), f"{name}: {key} = {got!r}"

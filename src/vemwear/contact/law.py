@@ -64,6 +64,15 @@ class LinearCompliance(ComplianceLaw):
     ------
     ValueError
         If ``c`` is negative or not finite.
+
+    Examples
+    --------
+    >>> from vemwear import LinearCompliance
+    >>> p = LinearCompliance(0.4)
+    >>> p([-0.1, 0.0, 0.5])  # no pressure out of contact
+    array([0. , 0. , 0.2])
+    >>> p.lipschitz
+    0.4
     """
 
     c: float
@@ -110,6 +119,21 @@ class TableCompliance(ComplianceLaw):
     ------
     ValueError
         If the table is not a monotone law through (0, 0) (the message names the entry).
+
+    Examples
+    --------
+    A layer that stiffens: slope 0.1 up to r = 0.1, then 0.4.
+
+    >>> from vemwear import TableCompliance
+    >>> p = TableCompliance(r=(0.0, 0.1, 0.2), p=(0.0, 0.01, 0.05))
+    >>> p([0.05, 0.15, 0.3])  # beyond the last point: the last slope
+    array([0.005, 0.03 , 0.09 ])
+    >>> round(p.lipschitz, 12)
+    0.4
+    >>> TableCompliance(r=(0.0, 0.1), p=(0.0, -1.0))
+    Traceback (most recent call last):
+    ...
+    ValueError: compliance table: p must be non-decreasing (p[0] = 0.0 > p[1] = -1.0)
     """
 
     r: tuple[float, ...]
@@ -190,6 +214,16 @@ class CallableCompliance(ComplianceLaw):
     lipschitz : float, optional
         The user's bound on ``dp``; only used for the smallness estimate of
         Theorem 3.4 (NaN: unknown).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vemwear import CallableCompliance
+    >>> p = CallableCompliance(
+    ...     lambda r: 0.4 * np.maximum(r, 0.0) ** 2, lambda r: 0.8 * np.maximum(r, 0.0)
+    ... )
+    >>> p(np.array([-1.0, 0.5])), p.derivative(np.array([-1.0, 0.5]))
+    (array([0. , 0.1]), array([0. , 0.4]))
     """
 
     p: Callable[[NDArray[np.float64]], NDArray[np.float64]]

@@ -148,7 +148,7 @@ def tangential_velocity(
     t: float,
     points: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """``v*(x_a, t) . tau_a`` at every contact node, with the v* of the node's part
+    """``v*(x_a, t) · tau_a`` at every contact node, with the v* of the node's part
     (``points``, the nodes, are needed for a v* that is a field).
 
     The tangential part of the foundation velocity is ``v*_tau = (v* . tau_a) tau_a``

@@ -154,6 +154,17 @@ def tag_rectangle(
     -------
     Mesh
         The mesh with its boundary edges tagged.
+
+    Examples
+    --------
+    >>> from vemwear.mesh import rectangle_squares, tag_rectangle
+    >>> mesh = tag_rectangle(rectangle_squares((2.0, 1.0), (4, 2)))
+    >>> mesh.part_names
+    ('clamped', 'traction', 'contact')
+    >>> parts = {"rollers": ["left", "right"], "contact": "bottom", "top": "top"}
+    >>> rollers = tag_rectangle(rectangle_squares((2.0, 1.0), (4, 2)), parts)
+    >>> rollers.part_counts()  # boundary edges per part
+    {'clamped': 0, 'traction': 0, 'contact': 4, 'rollers': 4, 'top': 4}
     """
     if parts is None:
         parts = {"clamped": "left", "traction": ["top", "right"], "contact": "bottom"}

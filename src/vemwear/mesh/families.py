@@ -319,5 +319,12 @@ def rectangle_voronoi(
     Returns
     -------
     Mesh
+
+    Examples
+    --------
+    >>> from vemwear.mesh import rectangle_voronoi
+    >>> mesh = rectangle_voronoi((2.0, 1.0), n_cells=32, seed=0)
+    >>> mesh.n_cells, round(float(mesh.cell_areas.sum()), 12)
+    (32, 2.0)
     """
     return voronoi_mesh(rectangle_domain(size, origin), n_cells, seed, **kwargs)  # type: ignore[arg-type,return-value]

@@ -50,6 +50,15 @@ def rectangle_squares(
     Returns
     -------
     Mesh
+
+    Examples
+    --------
+    >>> from vemwear.mesh import rectangle_squares
+    >>> mesh = rectangle_squares((2.0, 1.0), (4, 2))
+    >>> mesh.n_cells, mesh.n_points
+    (8, 15)
+    >>> mesh.cell(0)  # vertex ids, counter-clockwise
+    array([0, 1, 6, 5])
     """
     points, a, b, c, d, valid = _grid(size, divisions, origin)
     mesh = Mesh.from_cells(points, np.column_stack([a, b, c, d]))
@@ -80,6 +89,13 @@ def rectangle_triangles(
     Returns
     -------
     Mesh
+
+    Examples
+    --------
+    >>> from vemwear.mesh import rectangle_triangles
+    >>> mesh = rectangle_triangles((1.0, 1.0), (2, 2), diagonal="alternate")
+    >>> mesh.n_cells, float(mesh.cell_areas.sum())
+    (8, 1.0)
     """
     points, a, b, c, d, valid = _grid(size, divisions, origin)
     right = np.column_stack([a, b, c]), np.column_stack([a, c, d])

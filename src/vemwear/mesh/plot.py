@@ -108,7 +108,7 @@ def plot_mesh(
             Line2D(
                 [],
                 [],
-                color=PART_COLORS[name],
+                color=colors[name],
                 lw=3.0,
                 ls="--" if name == "untagged" else "-",
                 label=label,

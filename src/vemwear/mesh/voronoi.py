@@ -455,6 +455,15 @@ def voronoi_mesh(
     (``benchmarks/bench_mesher.py`` prints the quality report). If, in a non-convex
     domain, a clipped cell falls apart into several pieces, up to 20 extra Lloyd
     iterations are run (this only happens for poorly distributed seeds).
+
+    Examples
+    --------
+    An L-shaped domain (a non-convex polygon) in exactly 20 cells:
+
+    >>> from vemwear.mesh import l_shape_domain, voronoi_mesh
+    >>> mesh = voronoi_mesh(l_shape_domain(), 20, seed=1)
+    >>> mesh.n_cells
+    20
     """
     n = int(n_cells)
     if n < 1:

@@ -207,6 +207,25 @@ def simulate(
         Any error or interruption (KeyboardInterrupt) during the time loop carries the
         levels finished so far as ``exc.partial_result`` (a :class:`Result` with
         ``completed`` set) before it propagates.
+
+    Examples
+    --------
+    >>> import vemwear
+    >>> mesh = vemwear.tag_rectangle(vemwear.rectangle_squares((2.0, 1.0), (8, 4)))
+    >>> problem = vemwear.Problem(
+    ...     mesh, vemwear.Material(lam=4.0, eta=4.0), vemwear.TimeGrid.uniform(1.0, 8),
+    ...     f1=(0.0, -0.06), g=0.1, mu=0.2, kappa=2.0, v_star=(1.0, 0.0),
+    ... )
+    >>> result = vemwear.simulate(problem)  # condensed semismooth Newton
+    >>> result.wear.shape  # (levels, contact nodes)
+    (9, 8)
+    >>> print(f"{result.wear[-1].max():.6f}")
+    0.056086
+    >>> bool(result.residuals.max() <= 1e-10)  # KKT residuals of every step
+    True
+    >>> uzawa = vemwear.simulate(problem, "uzawa")
+    >>> bool(abs(uzawa.wear - result.wear).max() < 1e-8)
+    True
     """
     keep_freed_memory()  # as the command line does: arrays reuse freed memory
     opts = SolverOptions(method=solver) if isinstance(solver, str) else solver

@@ -108,6 +108,23 @@ class Problem(Generic[MeshT]):
     ``f2`` may also be a mapping ``{part: traction}`` for several traction parts.
     Every boundary edge belongs to one part; parts that are none of the above are
     traction-free.
+
+    Examples
+    --------
+    The paper's Section 5 setting on 8 x 4 squares, with 8 time steps:
+
+    >>> import vemwear
+    >>> mesh = vemwear.tag_rectangle(vemwear.rectangle_squares((2.0, 1.0), (8, 4)))
+    >>> problem = vemwear.Problem(
+    ...     mesh,
+    ...     vemwear.Material(lam=4.0, eta=4.0),
+    ...     vemwear.TimeGrid.uniform(T=1.0, steps=8),
+    ...     f1=(0.0, -0.06),
+    ...     p=vemwear.LinearCompliance(0.4),
+    ...     g=0.1, mu=0.2, kappa=2.0, v_star=(1.0, 0.0),
+    ... )
+    >>> [part.part for part in problem.parts], problem.time.n_steps
+    (['contact'], 8)
     """
 
     mesh: MeshT

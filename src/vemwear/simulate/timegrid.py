@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 @dataclass(frozen=True, eq=False)
 class TimeGrid:
-    """Time levels ``0 = t_0 < t_1 < ... < t_N = T``; ``k_n = t_{n+1} - t_n``.
+    """Time levels ``0 = t_0 < t_1 < … < t_N = T``; ``k_n = t_{n+1} - t_n``.
 
     Build one with :meth:`uniform`, :meth:`from_steps` or :meth:`pattern`, or from the
     levels themselves.
@@ -30,6 +30,18 @@ class TimeGrid:
     ValueError
         If the levels are empty, not finite, do not start at 0 or do not increase
         strictly (the message names the offending pair).
+
+    Examples
+    --------
+    >>> from vemwear import TimeGrid
+    >>> TimeGrid.uniform(T=1.0, steps=4).t
+    array([0.  , 0.25, 0.5 , 0.75, 1.  ])
+    >>> TimeGrid.from_steps([0.25, 0.25, 0.5]).k
+    array([0.25, 0.25, 0.5 ])
+    >>> TimeGrid([0.0, 0.5, 0.4])
+    Traceback (most recent call last):
+    ...
+    ValueError: time grid: levels must increase strictly (t[1] = 0.5, t[2] = 0.4)
     """
 
     t: NDArray[np.float64]

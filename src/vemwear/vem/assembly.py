@@ -69,7 +69,7 @@ def stiffness(mesh: Mesh, material: Material, stabilization: str = "paper") -> s
 
 
 def body_force_vector(mesh: Mesh, f1: Field, t: float = 0.0) -> NDArray[np.float64]:
-    """``<f_1h, v> = sum_K |K| P_0 f1 . (vertex average of v)`` (paper Section 3.3, k = 1).
+    """``<f_1h, v> = sum_K |K| P_0 f1 · (vertex average of v)`` (paper Section 3.3, k = 1).
 
     Each vertex of K receives ``|K| P_0^K f1 / n_K``.
     """
@@ -86,7 +86,7 @@ def body_force_vector(mesh: Mesh, f1: Field, t: float = 0.0) -> NDArray[np.float
 def edge_load_vector(
     mesh: Mesh, edges: NDArray[np.int64], f: Field, t: float = 0.0, name: str = "traction f2"
 ) -> NDArray[np.float64]:
-    """``int_E f . v ds`` over the given edges, by two-point Gauss on every edge
+    """``int_E f · v ds`` over the given edges, by two-point Gauss on every edge
     (exact for f linear along the edge, since v is linear there)."""
     F = np.zeros((mesh.n_points, 2))
     if len(edges) == 0:
@@ -101,5 +101,5 @@ def edge_load_vector(
 
 
 def traction_vector(mesh: Mesh, f2: Field, t: float = 0.0) -> NDArray[np.float64]:
-    """``int_{Gamma_N} f2 . v ds`` on the traction part."""
+    """``int_{Gamma_N} f2 · v ds`` on the traction part."""
     return edge_load_vector(mesh, mesh.part_edges("traction"), f2, t)
