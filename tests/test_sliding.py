@@ -382,3 +382,30 @@ def test_earlier_velocity_forms_bitwise(case) -> None:
     for key in ("wear", "u", "p_soft", "p_rigid", "forces"):
         h.update(np.ascontiguousarray(getattr(r, key)).tobytes())
     assert h.hexdigest()[:32] == digest
+
+
+class _Stop(Exception):
+    pass
+
+
+@pytest.mark.parametrize("level", [3, 6])
+def test_resume_of_a_turning_path_with_total_pressure(level) -> None:
+    """A circular path with friction and wear on the whole pressure, stopped at a level
+    and resumed: the same arrays as the uninterrupted run, bitwise (the resumed wear
+    update takes the same pressure)."""
+    v = lambda t: (np.cos(2 * np.pi * t), np.sin(2 * np.pi * t), 0.0)  # noqa: E731
+    pr = pin(v, steps=8, g=0.02, friction_on="total", wear_on="total")
+
+    def stop(n, _sol):
+        if n == level:
+            raise _Stop
+
+    with pytest.raises(_Stop) as info:
+        simulate(pr, store="all", recover_block=4, callback=stop)
+    part = info.value.partial_result  # type: ignore[attr-defined]
+    assert part.is_partial and part.completed <= level
+    resumed = simulate(pr, store="all", recover_block=4, resume=part)
+    ref = simulate(pr, store="all", recover_block=4)
+    assert ref.p_rigid.max() > 0
+    for key in ("wear", "u", "u_nu", "p_rigid", "p_soft", "forces", "residuals"):
+        assert np.array_equal(getattr(resumed, key), getattr(ref, key)), key
