@@ -152,7 +152,7 @@ def test_block_in_3d_on_rollers_is_pressed_uniformly() -> None:
 
 def test_a_load_that_pulls_off_stops_the_run_naming_the_level() -> None:
     pr = pad(f2=lambda x, t: np.column_stack([0 * x[:, 0], -P * np.cos(np.pi * t) + 0 * x[:, 0]]))
-    for method in ("newton", "newton-full"):
+    for method in ("newton", "newton-full", "uzawa"):
         with pytest.raises(
             ConvergenceError,
             match=r"pulls the body off the foundation at time "
@@ -161,9 +161,16 @@ def test_a_load_that_pulls_off_stops_the_run_naming_the_level() -> None:
             simulate(pr, method)
 
 
-def test_uzawa_refuses_load_control() -> None:
-    with pytest.raises(ValueError, match="uzawa needs a body held by its constraints"):
-        simulate(pad(), "uzawa")
+@pytest.mark.parametrize("mu", [0.0, 0.3])
+def test_uzawa_agrees_under_load_control(mu: float) -> None:
+    """Uzawa with the outer iteration on the rigid amplitudes (docs/method.md 1c)."""
+    pr = dataclasses.replace(tilting_pad(mu), time=TimeGrid.uniform(T=1.0, steps=3))
+    ref, uz = simulate(pr, "newton"), simulate(pr, "uzawa")
+    assert uz.residuals.max() <= 1e-10
+    assert np.abs(uz.u - ref.u).max() <= 1e-9 * np.abs(ref.u).max()
+    assert np.abs(uz.wear - ref.wear).max() <= 1e-9 * ref.wear.max()
+    flat = simulate(pad(steps=3), "uzawa")
+    assert np.abs(flat.p_soft - P / W).max() <= 1e-9 * P
 
 
 def test_cli_keeps_the_levels_before_the_load_pulls_off(tmp_path: Path) -> None:

@@ -23,10 +23,9 @@ from .rigid import (
     layer_x,
     liftoff_error,
     rigid_modes,
-    touching,
+    touching_solution,
 )
 from .system import (
-    _TINY,
     ContactSystem,
     ConvergenceError,
     StepData,
@@ -162,29 +161,13 @@ class FullNewton:
 
     def _touching(self, step: StepData) -> StepSolution:
         """Under a load with no component along the held rigid motions: no contact
-        force, the body touching the worn layer (:func:`.rigid.touching`)."""
-        s, rig = self.system, self.rigid
-        assert rig is not None
+        force, the body touching the worn layer (:func:`.rigid.touching_solution`)."""
+        assert self.rigid is not None
         if self._G is None:
-            self._G = anchored_factor(s, rig, self.options.backend)
-        u = self._G.solve(step.F)
-        y, *_ = touching(s, rig, step, s.N @ u)
-        u = u + rig.R @ (rig.pinv_NR @ (y - s.N @ u))
-        p_rigid = np.zeros(s.m)
-        res = kkt_residuals(s, step, u, p_rigid)
-        # the load is zero along R only to rounding: its residual, R (R^T F) / |R|^2, is
-        # measured as a backward error on the scale of the displacements (as the
-        # recovered u of the condensed solver is, kkt_residuals_block)
-        x_ref = max(float(np.abs(u).max(initial=0)), float(np.abs(s.g).max()))
-        r = s.K @ u - step.F
-        res["equilibrium"] = float(np.abs(r).max()) / max(
-            float(np.abs(step.F).max()), s.K_norm * x_ref, _TINY
-        )
-        check_converged(res, self.options.tol, step, "semismooth Newton (full)", 0)
-        y = s.N @ u
-        return StepSolution(
-            u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=0, residuals=res
-        )
+            self._G = anchored_factor(self.system, self.rigid, self.options.backend)
+        sol = touching_solution(self.system, self.rigid, step, self._G)
+        check_converged(sol.residuals, self.options.tol, step, "semismooth Newton (full)", 0)
+        return sol
 
 
 __all__ = ["FullNewton"]

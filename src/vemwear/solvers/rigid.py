@@ -30,7 +30,14 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .backends import factorize, schur_factorize
-from .system import _TINY, ContactSystem, ConvergenceError, StepData, at_rounding_floor
+from .system import (
+    _TINY,
+    ContactSystem,
+    ConvergenceError,
+    StepData,
+    StepSolution,
+    at_rounding_floor,
+)
 
 __all__ = ["AnchoredFactor", "RigidModes", "choose_anchors", "layer_x", "rigid_modes"]
 
@@ -372,3 +379,30 @@ def touching(system: ContactSystem, rig: RigidModes, step: StepData, d: NDArray)
     zero = np.zeros(s.m)
     res = condensed_residuals(s, y, zero, zero)
     return y, zero, s.p(y - step.w), 0, (0.0, res["feasibility"], res["complementarity"])
+
+
+def touching_solution(
+    system: ContactSystem, rig: RigidModes, step: StepData, G: AnchoredFactor
+) -> StepSolution:
+    """:func:`touching` as a full step solution (u = G F + R a) for the solvers that
+    work with u, with its residuals. The load is zero along R only to rounding: its
+    residual, R (R^T F) / |R|^2, is measured as a backward error on the scale of the
+    displacements (as the condensed solver's recovered u is, ``kkt_residuals_block``),
+    not over |F|, which may itself be that small."""
+    from .system import kkt_residuals
+
+    s = system
+    u = G.solve(step.F)
+    y, *_ = touching(s, rig, step, s.N @ u)
+    u = u + rig.R @ (rig.pinv_NR @ (y - s.N @ u))
+    p_rigid = np.zeros(s.m)
+    res = kkt_residuals(s, step, u, p_rigid)
+    x_ref = max(float(np.abs(u).max(initial=0)), float(np.abs(s.g).max()))
+    r = s.K @ u - step.F
+    res["equilibrium"] = float(np.abs(r).max()) / max(
+        float(np.abs(step.F).max()), s.K_norm * x_ref, _TINY
+    )
+    y = s.N @ u
+    return StepSolution(
+        u=u, u_nu=y, p_rigid=p_rigid, p_soft=s.p(y - step.w), iterations=0, residuals=res
+    )
