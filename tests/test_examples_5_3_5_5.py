@@ -262,8 +262,9 @@ def test_available_examples_imports_no_example_and_no_numerics() -> None:
 
     code = (
         "import sys, vemwear.paper as p; d = p.available_examples(); "
-        "assert list(d) == ['5.2', '5.3', '5.4', '5.5', '3d'], d; "
-        "assert all(v.startswith(('Example 5.', 'Example 3d')) for v in d.values()), d; "
+        "assert list(d) == ['5.2', '5.3', '5.4', '5.5', '3d', 'hertz'], d; "
+        "assert all(v.startswith(('Example 5.', 'Example 3d', 'Example hertz')) "
+        "for v in d.values()), d; "
         "bad = [m for m in ('numpy', 'vemwear.paper.ex52', 'vemwear.simulate') "
         "if m in sys.modules]; assert not bad, bad"
     )
