@@ -141,3 +141,52 @@ def test_a_direction_held_by_nothing_is_named() -> None:
     d["boundary"]["free"] = ["left", "right"]
     with pytest.raises(ConfigError, match=r"leave rigid motions free: the translation in x"):
         parse(d)
+
+
+def test_summary_reports_the_holders_translation(tmp_path: Any) -> None:
+    import json
+
+    from vemwear.cli.main import main
+
+    d = copy.deepcopy(CONFIG)
+    lines = [
+        "[mesh]",
+        'generator = "squares"',
+        "size = [1.0, 0.5]",
+        "divisions = [8, 4]",
+        "[boundary]",
+        'contact = "bottom"',
+        "[[boundary.displacement]]",
+        'name = "rollers"',
+        'on = ["left", "right"]',
+        "ux = 0.0",
+        "[[boundary.rigid]]",
+        'name = "holder"',
+        'on = "top"',
+        f'fy = "{d["boundary"]["rigid"][0]["fy"]}"',
+        "[material]",
+        "lam = 4.0",
+        "eta = 4.0",
+        "[contact]",
+        'p = { type = "linear", c = 1.0 }',
+        "g = 0.1",
+        "mu = 0.0",
+        "kappa = 0.5",
+        "v_star = [1.0, 0.0]",
+        "[time]",
+        "T = 1.0",
+        "steps = 4",
+        "[output]",
+        "figures = false",
+        "vtk = false",
+    ]
+    cfg = tmp_path / "holder.toml"
+    cfg.write_text("\n".join(lines) + "\n")
+    assert main(["run", str(cfg), "-o", str(tmp_path / "out"), "--no-progress"]) == 0
+    out = json.loads((tmp_path / "out" / "summary.json").read_text())["outputs"]
+    tx, ty = out["rigid_parts"]["holder"]["translation_final"]
+    with np.load(tmp_path / "out" / "result.npz") as z:
+        top = np.abs(z["points"][:, 1] - 0.5) < 1e-12
+        assert np.allclose(z["u"][-1][top], [tx, ty], rtol=0, atol=1e-15)
+        assert [str(n) for n in z["force_parts"]] == ["contact", "rollers", "holder"]
+    assert ty < 0 and abs(tx) < 1e-15

@@ -348,6 +348,16 @@ def summarize(result: Result) -> dict[str, Any]:
         from .forces import force_table
 
         outputs["forces_final"] = force_table(result)
+    ties = result.problem.constraints.ties
+    if ties is not None and len(result.u):  # each rigid part's translation at T
+        d = result.problem.dim
+        u_T = np.asarray(result.u[-1])
+        outputs["rigid_parts"] = {
+            pc.part: {
+                "translation_final": [float(u_T[int(dof) // d, c]) for c, dof in enumerate(row)]
+            }
+            for pc, row in zip(ties.parts, ties.masters, strict=True)
+        }
     return {"statistics": stats, "outputs": outputs}
 
 
