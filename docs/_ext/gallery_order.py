@@ -13,6 +13,8 @@ ORDER = (
     "plot_block_displacement.py",
     "plot_fretting.py",
     "plot_3d.py",
+    "plot_pin_on_disc.py",
+    "plot_hertz.py",
     "plot_sweep.py",
     "plot_fit.py",
 )

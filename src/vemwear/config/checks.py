@@ -201,10 +201,14 @@ def check_scales(src: str, mesh: Any, c: s.ConfigFile) -> None:
             f"compute with (its cell measures and the stiffness under- or overflow); use "
             f"units in which its size lies between {lo:g} and {hi:g}"
         )
-    g = c.contact.g
-    if isinstance(g, int | float) and not abs(g) <= hi:
+    tables = c.contact if isinstance(c.contact, list) else [c.contact]
+    for i, table in enumerate(tables):
+        g = table.g
+        if not isinstance(g, int | float) or abs(g) <= hi:
+            continue
+        key = f"[[contact]] {i + 1}" if isinstance(c.contact, list) else "[contact]"
         raise ConfigError(
-            f"{src}: [contact] g = {g:g} is too large to compute with (the layer's "
+            f"{src}: {key} g = {g:g} is too large to compute with (the layer's "
             f"penetrations and the law p(r) on them overflow); use units in which it is at "
             f"most {hi:g}"
         )
