@@ -70,6 +70,8 @@ t = time.perf_counter()
 code = main(["run", sys.argv[3], "-o", sys.argv[4], "--no-progress", "--force"])
 wall = time.perf_counter() - t
 peak = peak_memory()
+if code != 0:  # refused or failed: no summary, and the mesh is not to be made again
+    raise SystemExit(code)
 tm = json.load(open(sys.argv[4] + "/summary.json"))["timings"]
 est = estimate_config(load_config(sys.argv[3]), base=base).memory  # the run's own base
 print(json.dumps({"base": base, "estimate": est, "peak": peak, "code": code, "wall": wall,

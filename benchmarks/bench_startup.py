@@ -36,7 +36,7 @@ MODULES = """
 import sys
 from vemwear.cli.main import main
 assert main(sys.argv[1:]) == 0
-print(" ".join(sorted(m for m in {opt} if m in sys.modules)))
+print("MODULES:", *sorted(m for m in {opt} if m in sys.modules))
 """
 
 
@@ -84,7 +84,8 @@ def main(argv: list[str] | None = None) -> int:
         out = subprocess.run(
             [sys.executable, "-c", code, *run], env=env, check=True, capture_output=True, text=True
         )
-        print(f"optional libraries the run imported: {out.stdout.strip() or 'none'}")
+        held = out.stdout.strip().splitlines()[-1].split()[1:]
+        print(f"optional libraries the run imported: {' '.join(held) or 'none'}")
     return 0
 
 
