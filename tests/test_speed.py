@@ -75,6 +75,19 @@ def test_summary_timings_name_every_phase(tmp_path: Path, capsys) -> None:
     assert tm["total"] == pytest.approx(tm["assembly"] + tm["setup"] + tm["time_loop"])
 
 
+def test_a_reused_factorization_is_not_reported_again() -> None:
+    """A second run of the same problem in the process reuses the assembly and the
+    factorization: its timings say so (0 s), the first run's give what it spent."""
+    from vemwear.simulate import simulate
+
+    pr = parse_config(tomllib.loads(VORONOI_3D)).problem
+    first = simulate(pr, SolverOptions(backend="scipy"), store="final").timings
+    second = simulate(pr, SolverOptions(backend="scipy"), store="final").timings
+    assert first["assembly"] > 0.0 and first["setup"] > 0.0
+    assert second["assembly"] == 0.0 and second["setup"] == 0.0
+    assert second["total"] == second["time_loop"]
+
+
 @pytest.mark.parametrize("family", ["hexahedra", "tetrahedra", "voronoi3d", "prisms"])
 @pytest.mark.parametrize("stabilization", ["paper", "trace"])
 def test_element_matrices3d_stabilization_is_the_product(family: str, stabilization: str) -> None:
