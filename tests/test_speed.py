@@ -75,6 +75,19 @@ def test_summary_timings_name_every_phase(tmp_path: Path, capsys) -> None:
     assert tm["total"] == pytest.approx(tm["assembly"] + tm["setup"] + tm["time_loop"])
 
 
+def test_a_reused_factorization_is_not_reported_again() -> None:
+    """A second run of the same problem in the process reuses the assembly and the
+    factorization: its timings say so (0 s), the first run's give what it spent."""
+    from vemwear.simulate import simulate
+
+    pr = parse_config(tomllib.loads(VORONOI_3D)).problem
+    first = simulate(pr, SolverOptions(backend="scipy"), store="final").timings
+    second = simulate(pr, SolverOptions(backend="scipy"), store="final").timings
+    assert first["assembly"] > 0.0 and first["setup"] > 0.0
+    assert second["assembly"] == 0.0 and second["setup"] == 0.0
+    assert second["total"] == second["time_loop"]
+
+
 @pytest.mark.parametrize("family", ["hexahedra", "tetrahedra", "voronoi3d", "prisms"])
 @pytest.mark.parametrize("stabilization", ["paper", "trace"])
 def test_element_matrices3d_stabilization_is_the_product(family: str, stabilization: str) -> None:
@@ -106,3 +119,71 @@ def _voigt(mat: Material) -> np.ndarray:
     from vemwear.vem.local3d import elasticity_matrix
 
     return elasticity_matrix(mat)
+
+
+LAZY_IN_A_RUN = ("matplotlib", "meshio", "xarray", "dask", "pandas", "scipy.spatial")
+
+
+def _imported(code: str, *args: str) -> set[str]:
+    """The top-level and listed modules a fresh interpreter holds after ``code``."""
+    import subprocess
+    import sys
+
+    probe = (
+        code + "\nimport sys\nprint('MODULES:', *(m for m in sys.modules if m in "
+        f"{(*LAZY_IN_A_RUN, 'numpy', 'scipy', 'pydantic', 'h5py')!r}))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", probe, *args], capture_output=True, text=True, check=True
+    )
+    return set(out.stdout.strip().splitlines()[-1].split()[1:])
+
+
+def test_import_vemwear_loads_no_numerical_library() -> None:
+    assert _imported("import vemwear") == set()
+
+
+def test_a_run_imports_no_library_it_does_not_use(tmp_path: Path) -> None:
+    """``vemwear run`` without figures, ParaView output or a mesh file: no plotting,
+    mesh-file, study or point-location library is imported."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(small_config("lazy", divisions=(8, 4), steps=4))
+    code = (
+        "import sys\nfrom vemwear.cli.main import main\n"
+        "assert main(['run', sys.argv[1], '-o', sys.argv[2], '--no-progress']) == 0"
+    )
+    held = _imported(code, str(cfg), str(tmp_path / "out"))
+    assert {"numpy", "scipy", "h5py"} <= held  # the run ran and streamed its levels
+    assert not held & set(LAZY_IN_A_RUN)
+
+
+@pytest.mark.parametrize("family", ["hexahedra", "tetrahedra", "voronoi3d", "prisms"])
+def test_coupled_vertices_is_the_block_count_of_k(family: str) -> None:
+    """The plan's count of coupled vertices is the number of nonzero 3 x 3 blocks per
+    block row of the assembled stiffness, on a sample and on every vertex."""
+    from vemwear.runner.plan import coupled_vertices
+    from vemwear.vem.local3d import stiffness3d
+
+    if family in ("voronoi3d", "prisms"):
+        mesh = generate_mesh3d(family, cells=60, seed=2)
+    else:
+        mesh = generate_mesh3d(family, divisions=(6, 3, 3))
+    K = stiffness3d(mesh, Material(4.0, 4.0)).tocsr()
+    blocks = sp.csr_matrix(K[0::3, 0::3])
+    blocks.data[:] = 1.0  # numerical zeros (none here) would still be stored entries
+    assert coupled_vertices(mesh) == pytest.approx(blocks.nnz / mesh.n_points, rel=1e-12)
+    one = coupled_vertices(mesh, sample=1)  # vertex 0 alone
+    assert one == K[0].nnz / 3
+
+
+def test_plan_counts_the_dense_contact_block() -> None:
+    """The dense Schur block on the d m contact dofs is in the estimate: 20 (d m)^2
+    bytes (it outgrows the factorization on prisms, whose contact side is the whole
+    base mesh)."""
+    from vemwear.runner.plan import estimate
+
+    kw = dict(levels=17, points=20_005, cells=8000, kept=17, stored_u=1, paraview=False)
+    small = estimate(contact=2, dim=3, coupled=33.0, base=1e8, **kw).memory
+    large = estimate(contact=4001, dim=3, coupled=33.0, base=1e8, **kw).memory
+    rows = 17 * 7 * 8 * (4001 - 2)  # the kept contact rows, twice
+    assert large - small == pytest.approx(20.0 * ((3 * 4001) ** 2 - 36) + 2 * rows)

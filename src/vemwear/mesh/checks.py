@@ -8,6 +8,8 @@ from collections import OrderedDict
 import numpy as np
 from numpy.typing import NDArray
 
+from ..util.arrays import isin as _isin
+from ..util.arrays import unique as _unique
 from .polymesh import Mesh, MeshError
 
 _SHOW = 10
@@ -30,7 +32,7 @@ def _apart(points: NDArray[np.float64], tol: float) -> bool:
     x coordinates more than ``tol`` apart, and the points of equal x more than ``tol``
     apart in y (a close pair has close x and y). False: a closer look is needed."""
     x, y = points[:, 0], points[:, 1]
-    xs = np.unique(x)
+    xs = _unique(x)
     if len(xs) > 1 and np.diff(xs).min() <= tol:
         return False
     order = np.lexsort((y, x))  # by x, then y: a close pair of equal x is adjacent
@@ -120,13 +122,13 @@ def check_conforming(mesh: Mesh, rtol: float = 1e-9) -> None:
     uniq, counts = np.unique(key, return_counts=True)
     if np.any(counts > 1):
         k = uniq[counts > 1]
-        rows = np.flatnonzero(np.isin(key, k))
+        rows = np.flatnonzero(_isin(key, k))
         raise MeshError(
-            f"cells {_ids(np.unique(mesh.edge_cells[rows]))} overlap: they share an edge "
+            f"cells {_ids(_unique(mesh.edge_cells[rows]))} overlap: they share an edge "
             "with the same orientation"
         )
     be = mesh.boundary_edges
-    bv = np.unique(be)
+    bv = _unique(be)
     if len(be) == 0:
         raise MeshError("the mesh has no boundary edges")
     a, b = mesh.points[be[:, 0]], mesh.points[be[:, 1]]
@@ -186,8 +188,8 @@ def _check_nested_pieces(mesh: Mesh) -> None:
             loops.append(loop)
         outer = max(loops, key=lambda lp: _signed_area(mesh.points[lp]))
         inside = Path(mesh.points[outer]).contains_points(mesh.points)
-        others = np.unique(mesh.cell_vertices[piece[mesh.edge_cells] != k])
-        others = others[~np.isin(others, outer)]
+        others = _unique(mesh.cell_vertices[piece[mesh.edge_cells] != k])
+        others = others[~_isin(others, outer)]
         hit = others[inside[others]]
         if hit.size:
             cells = np.flatnonzero(piece == k)

@@ -22,6 +22,8 @@ from itertools import chain
 import numpy as np
 from numpy.typing import NDArray
 
+from ..util.arrays import isin as _isin
+from ..util.arrays import unique as _unique
 from .checks import _ids
 from .geometry3d import face_planarity, loop_next, loop_owner
 from .polyhedra import Mesh3D
@@ -47,7 +49,7 @@ def check_vertices3d(mesh: Mesh3D, rtol: float = 1e-10) -> None:
     from scipy.spatial import cKDTree
 
     used = np.zeros(mesh.n_points, dtype=bool)
-    used[mesh.face_vertices[np.isin(loop_owner(mesh.face_offsets), mesh.cell_faces)]] = True
+    used[mesh.face_vertices[_isin(loop_owner(mesh.face_offsets), mesh.cell_faces)]] = True
     if not np.all(used):
         raise MeshError(f"vertices {_ids(np.flatnonzero(~used))} belong to no cell (dangling)")
     pairs = cKDTree(mesh.points).query_pairs(rtol * _scale(mesh), output_type="ndarray")
@@ -68,7 +70,7 @@ def check_faces3d(mesh: Mesh3D, rtol: float = 1e-12, planarity: float = 1e-8) ->
     off, fv = mesh.face_offsets, mesh.face_vertices
     owner = loop_owner(off)
     key = np.sort(owner * mesh.n_points + fv)
-    rep = np.unique(key[1:][key[1:] == key[:-1]] // mesh.n_points)
+    rep = _unique(key[1:][key[1:] == key[:-1]] // mesh.n_points)
     if rep.size:
         raise MeshError(f"faces {_ids(rep)} list a vertex twice")
     diam = mesh.face_diameters
@@ -109,7 +111,7 @@ def check_cells3d(mesh: Mesh3D, rtol: float = 1e-12) -> None:
     n = mesh.n_points
     pair = mesh.cell_of_entry * mesh.n_faces + mesh.cell_faces
     s = np.sort(pair)
-    twice = np.unique(s[1:][s[1:] == s[:-1]] // mesh.n_faces)
+    twice = _unique(s[1:][s[1:] == s[:-1]] // mesh.n_faces)
     if twice.size:
         raise MeshError(f"cells {_ids(twice)} list a face twice")
     a, b, cell = _cell_edges(mesh)
@@ -118,18 +120,18 @@ def check_cells3d(mesh: Mesh3D, rtol: float = 1e-12) -> None:
     if np.any(counts > 1):
         k = uniq[counts > 1][0]
         c, rest = divmod(int(k), n * n)
-        bad = np.unique(uniq[counts > 1] // (n * n))
+        bad = _unique(uniq[counts > 1] // (n * n))
         raise MeshError(
             f"cells {_ids(bad)} are not closed or their faces are misoriented: edge "
             f"({rest // n}, {rest % n}) of cell {c} is used twice in the same direction "
             "(check the signs of the cell's faces)"
         )
     rev = (cell * n + b) * n + a
-    alone = ~np.isin(key, rev)
+    alone = ~_isin(key, rev)
     if np.any(alone):
         i = np.flatnonzero(alone)[0]
         raise MeshError(
-            f"cells {_ids(np.unique(cell[alone]))} are not closed: edge ({a[i]}, {b[i]}) of "
+            f"cells {_ids(_unique(cell[alone]))} are not closed: edge ({a[i]}, {b[i]}) of "
             f"cell {cell[i]} belongs to one of its faces only"
         )
     vol = mesh.cell_volumes
@@ -164,7 +166,7 @@ def check_conforming3d(mesh: Mesh3D) -> None:
     if bf.size == 0:
         raise MeshError("the mesh has no boundary faces")
     off, fv, sizes = mesh.face_offsets, mesh.face_vertices, mesh.face_sizes
-    for m in np.unique(sizes[bf]):  # boundary faces with the same vertex set, by size
+    for m in _unique(sizes[bf]):  # boundary faces with the same vertex set, by size
         g = bf[sizes[bf] == m]
         S = np.sort(fv[off[g][:, None] + np.arange(m)], axis=1)
         order = np.lexsort(S.T[::-1])
@@ -184,18 +186,18 @@ def check_conforming3d(mesh: Mesh3D) -> None:
     a, b = np.where(sign < 0, b, a), np.where(sign < 0, a, b)
     key, rev = a * n + b, b * n + a
     uniq, counts = np.unique(key, return_counts=True)
-    lone = ~np.isin(key, rev) | np.isin(key, uniq[counts > 1])
+    lone = ~_isin(key, rev) | _isin(key, uniq[counts > 1])
     if np.any(lone):
         i = np.flatnonzero(lone)
         f = face[i[0]]
         cell = mesh.cell_of_entry[np.flatnonzero(mesh.cell_faces == f)[0]]
         raise MeshError(
-            f"non-conforming faces {_ids(np.unique(face[i]))}: edge ({a[i[0]]}, {b[i[0]]}) of "
+            f"non-conforming faces {_ids(_unique(face[i]))}: edge ({a[i[0]]}, {b[i[0]]}) of "
             f"boundary face {f} (cell {cell}) is not matched by exactly one other boundary "
             "face; neighbouring cells must share whole faces (put hanging nodes in the "
             "loops of the larger faces)"
         )
-    _check_hanging(mesh, np.unique(np.minimum(a, b) * n + np.maximum(a, b)), face, a, b)
+    _check_hanging(mesh, _unique(np.minimum(a, b) * n + np.maximum(a, b)), face, a, b)
 
 
 def _check_hanging(
@@ -208,7 +210,7 @@ def _check_hanging(
     n = mesh.n_points
     ea, eb = np.divmod(keys, n)
     P = mesh.points
-    verts = np.unique(np.concatenate([ea, eb]))
+    verts = _unique(np.concatenate([ea, eb]))
     A, B = P[ea], P[eb]
     half = 0.5 * np.linalg.norm(B - A, axis=1)
     hits = cKDTree(P[verts]).query_ball_point(0.5 * (A + B), half * (1 - 1e-9))

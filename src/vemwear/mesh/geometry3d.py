@@ -20,6 +20,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..util.arrays import unique as _unique
+
 __all__ = [
     "cell_geometry",
     "face_geometry",
@@ -180,7 +182,7 @@ def group_max_distance(
     n = len(offsets) - 1
     sizes = np.diff(offsets)
     out = np.zeros(n)
-    for s in np.unique(sizes):
+    for s in _unique(sizes):
         if s < 2:
             continue
         g = np.flatnonzero(sizes == s)

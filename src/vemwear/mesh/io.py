@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..util.arrays import unique as _unique
 from .checks import check_cells, check_conforming, check_vertices
 from .polymesh import PARTS, Mesh, MeshError
 
@@ -100,7 +101,7 @@ def from_meshio(m: meshio.Mesh) -> Mesh:
     if not cells:
         raise MeshError("no polygonal cells found")
     ids = np.concatenate(order)
-    if np.all(ids >= 0) and len(np.unique(ids)) == len(ids):
+    if np.all(ids >= 0) and len(_unique(ids)) == len(ids):
         cells = [cells[i] for i in np.argsort(ids)]
     # drop points not used by any 2D cell (gmsh keeps geometry points)
     used = np.zeros(len(pts), bool)

@@ -34,6 +34,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..util.arrays import unique as _unique
 from .generate3d import HEX_FACES, TET_FACES, cell_loops
 from .geometry3d import reverse_loops, take_loops
 from .polyhedra import Mesh3D
@@ -222,7 +223,7 @@ def from_meshio3d(m: meshio.Mesh) -> Mesh3D:
             off = np.zeros(len(faces) + 1, dtype=np.int64)
             np.cumsum(sizes, out=off[1:])
             tags = np.zeros(len(codes), dtype=np.int64)
-            for c in np.unique(codes[codes > 0]):
+            for c in _unique(codes[codes > 0]):
                 name = names.get(int(c), f"physical_{int(c)}")
                 if name not in part_names:
                     part_names.append(name)
@@ -238,7 +239,7 @@ def from_meshio3d(m: meshio.Mesh) -> Mesh3D:
     verts = np.concatenate([p[1] for p in parts])
     cells = np.concatenate([p[2] for p in parts])
     ids = np.concatenate(order)
-    if np.all(ids >= 0) and len(np.unique(ids)) == len(ids) and ids.max() == len(ids) - 1:
+    if np.all(ids >= 0) and len(_unique(ids)) == len(ids) and ids.max() == len(ids) - 1:
         cells = ids[cells]
     if verts.min() < 0 or verts.max() >= len(pts):
         raise MeshError(f"cells refer to vertex ids outside 0..{len(pts) - 1}")

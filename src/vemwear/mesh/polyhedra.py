@@ -30,6 +30,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..util.arrays import unique as _unique
 from .polymesh import PARTS, BoundaryParts, MeshError, checked_tags
 
 __all__ = ["Mesh3D"]
@@ -107,7 +108,7 @@ class Mesh3D(BoundaryParts):
             bad = np.flatnonzero((cf < 0) | (cf >= nf))
             cells = np.searchsorted(coff, bad, side="right") - 1
             raise MeshError(
-                f"cells {np.unique(cells)[:10].tolist()} refer to face ids outside 0..{nf - 1}"
+                f"cells {_unique(cells)[:10].tolist()} refer to face ids outside 0..{nf - 1}"
             )
         uses = np.bincount(cf, minlength=nf)
         if np.any(uses > 2):
@@ -185,7 +186,7 @@ class Mesh3D(BoundaryParts):
         sizes = np.diff(off)
         rep = np.empty(nl, dtype=np.int64)  # the first loop with the same vertex set
         forward = np.empty(nl, dtype=bool)  # the loop's direction, read from its least vertex
-        for s in np.unique(sizes):  # loops of one size at a time
+        for s in _unique(sizes):  # loops of one size at a time
             g = np.flatnonzero(sizes == s)
             R = lv[off[g][:, None] + np.arange(s)]
             S = np.sort(R, axis=1)
@@ -342,7 +343,7 @@ class Mesh3D(BoundaryParts):
 
         a = self.face_vertices
         b = a[loop_next(self.face_offsets)]
-        key = np.unique(np.minimum(a, b) * self.n_points + np.maximum(a, b))
+        key = _unique(np.minimum(a, b) * self.n_points + np.maximum(a, b))
         return np.column_stack(np.divmod(key, self.n_points))
 
     # ------------------------------------------------------------------ cells
@@ -366,7 +367,7 @@ class Mesh3D(BoundaryParts):
             per_face.sum()
         )
         verts = self.face_vertices[idx]
-        key = np.unique(cell * self.n_points + verts)
+        key = _unique(cell * self.n_points + verts)
         cells, verts = np.divmod(key, self.n_points)
         off = np.zeros(self.n_cells + 1, dtype=np.int64)
         np.cumsum(np.bincount(cells, minlength=self.n_cells), out=off[1:])

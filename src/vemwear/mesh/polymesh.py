@@ -22,6 +22,8 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..util.arrays import unique as _unique
+
 #: The paper's boundary parts, codes 1, 2, 3 of every mesh (then any other names).
 PARTS: tuple[str, ...] = ("clamped", "traction", "contact")
 UNTAGGED = 0
@@ -73,7 +75,7 @@ class BoundaryParts:
     @property
     def parts(self) -> tuple[str, ...]:
         """Names of the parts that have boundary edges (faces in 3D), in code order."""
-        present = set(np.unique(np.asarray(self.boundary_tags)).tolist())
+        present = set(_unique(np.asarray(self.boundary_tags)).tolist())
         return tuple(n for i, n in enumerate(self.part_names) if i + 1 in present)
 
     def part_counts(self) -> dict[str, int]:
@@ -148,7 +150,7 @@ class Mesh(BoundaryParts):
             bad = np.flatnonzero((cv < 0) | (cv >= len(pts)))
             cells = np.searchsorted(off, bad, side="right") - 1
             raise MeshError(
-                f"cells {np.unique(cells)[:10].tolist()} refer to vertex ids "
+                f"cells {_unique(cells)[:10].tolist()} refer to vertex ids "
                 f"outside 0..{len(pts) - 1}"
             )
         object.__setattr__(self, "points", pts)
@@ -212,7 +214,7 @@ class Mesh(BoundaryParts):
         """Cells batched by vertex count: ``{n: (cell_ids, (m, n) vertex ids)}``."""
         out: dict[int, tuple[NDArray[np.int64], NDArray[np.int64]]] = {}
         sizes = self.cell_sizes
-        for n in np.unique(sizes):
+        for n in _unique(sizes):
             ids = np.flatnonzero(sizes == n)
             idx = self.cell_offsets[ids][:, None] + np.arange(n)[None, :]
             out[int(n)] = (ids, self.cell_vertices[idx])
@@ -311,7 +313,7 @@ class Mesh(BoundaryParts):
 
     def part_vertices(self, name: str) -> NDArray[np.int64]:
         """Sorted ids of the vertices on the closure of a part."""
-        return np.unique(self.part_edges(name))
+        return _unique(self.part_edges(name))
 
     def with_boundary(
         self,

@@ -33,6 +33,7 @@ from itertools import combinations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..util.arrays import unique as _unique
 from .polymesh import Mesh
 
 __all__ = ["QualityReport", "kernel_disks", "quality_report"]
@@ -327,4 +328,4 @@ def hanging_nodes(mesh: Mesh, rtol: float = 1e-10) -> NDArray[np.int64]:
         dot = np.sum(e_in * e_out, axis=-1)
         scale = np.linalg.norm(e_in, axis=-1) * np.linalg.norm(e_out, axis=-1)
         found.append(verts[(np.abs(cross) <= rtol * scale) & (dot > 0)])
-    return np.unique(np.concatenate(found))
+    return _unique(np.concatenate(found))

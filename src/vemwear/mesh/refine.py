@@ -28,6 +28,8 @@ from typing import Literal, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..util.arrays import isin as _isin
+from ..util.arrays import unique as _unique
 from .polymesh import Mesh, MeshError
 from .quality import _kernel_disk_group
 
@@ -76,7 +78,7 @@ def _per_cell(
     vertex count; ``{cell: row of the result}``."""
     out: dict[int, NDArray] = {}
     for ids, verts in mesh.groups.values():
-        mine = np.isin(ids, cells)
+        mine = _isin(ids, cells)
         if np.any(mine):
             res = fn(mesh.points[verts[mine]], ids[mine])
             out.update(zip(ids[mine].tolist(), res, strict=True))
@@ -117,7 +119,7 @@ def refine_cells(
         (so cell ids after it shift); the old vertices keep their ids, new vertices
         (side midpoints, then centres) are appended. Boundary tags carry over.
     """
-    sel = np.unique(np.asarray(cell_ids, dtype=np.int64).ravel())
+    sel = _unique(np.asarray(cell_ids, dtype=np.int64).ravel())
     if sel.size and (sel[0] < 0 or sel[-1] >= mesh.n_cells):
         raise ValueError(f"cell ids must lie in 0..{mesh.n_cells - 1}")
     if sel.size == 0:
@@ -184,7 +186,7 @@ def refine_cells(
         nk = max(nP, 1)
         code = keys[:, 0] * nk + keys[:, 1]
         wanted = np.array([a * nk + b for (a, b) in on_edge], dtype=np.int64)
-        rows = np.flatnonzero(np.isin(code, wanted))
+        rows = np.flatnonzero(_isin(code, wanted))
         touched = set(mesh.edge_cells[rows].tolist())
 
     def augmented(c: int) -> list[int]:
@@ -289,8 +291,8 @@ def refine_along(
             cells = mesh.boundary_edge_cells[mesh.boundary_tags == code]
         else:
             vs = mesh.part_vertices(part)
-            cells = mesh.edge_cells[np.isin(mesh.directed_edges[:, 0], vs)]
-        mesh = refine_cells(mesh, np.unique(cells))
+            cells = mesh.edge_cells[_isin(mesh.directed_edges[:, 0], vs)]
+        mesh = refine_cells(mesh, _unique(cells))
     return mesh
 
 

@@ -48,6 +48,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..util.arrays import isin as _isin
+from ..util.arrays import unique as _unique
 from .checks import check_cells, check_conforming, check_vertices, crossing_sides
 from .domains import (
     _nearest_sides,
@@ -217,7 +219,7 @@ def _invalid_polygons(
     """Which of ``cells`` are not simple counter-clockwise polygons (area <= 0 or crossing)."""
     lens = off[cells + 1] - off[cells]
     out = np.zeros(len(cells), dtype=bool)
-    for n in np.unique(lens):
+    for n in _unique(lens):
         sel = np.flatnonzero(lens == n)
         idx = off[cells[sel]][:, None] + np.arange(n)
         X = points[cv[idx]]
@@ -236,7 +238,7 @@ def _boundary_vertices(off: IntArray, cv: IntArray, n_points: int) -> IntArray:
     rev = b * n_points + a
     pos = np.minimum(np.searchsorted(fwd, rev), len(fwd) - 1)
     lone = fwd[pos] != rev
-    return np.unique(np.concatenate([a[lone], b[lone]]))
+    return _unique(np.concatenate([a[lone], b[lone]]))
 
 
 def _snap_boundary(points: FloatArray, v: IntArray, dom: FloatArray) -> FloatArray:
@@ -287,7 +289,7 @@ def _initial_seeds(dom: FloatArray, n: int, rng: np.random.Generator) -> FloatAr
     unit = np.column_stack([i + 0.5 * (j % 2), j * (np.sqrt(3.0) / 2)]) - 1.0
     unit += rng.random(2) + _JITTER * (rng.random((len(unit), 2)) - 0.5)
 
-    box = len(dom) == 4 and np.all(np.isin(dom, (lo, hi)).reshape(4, 2), axis=None)
+    box = len(dom) == 4 and np.all(_isin(dom, (lo, hi)).reshape(4, 2), axis=None)
 
     def inside(a: float) -> NDArray[np.bool_]:
         x = lo + a * unit

@@ -30,6 +30,7 @@ from itertools import chain
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..util.arrays import unique as _unique
 from .generate3d import tag_box
 from .geometry3d import cell_geometry, face_geometry, loop_next, loop_owner, take_loops
 from .polyhedra import Mesh3D
@@ -90,7 +91,7 @@ def _diagram(
         return None
     tol = 1e-9 * float(np.max(hi - lo))
     P = vor.vertices
-    used = np.unique(fv)
+    used = _unique(fv)
     if np.any(P[used] < lo - tol) or np.any(P[used] > hi + tol):
         return None
     remap = np.full(len(P), -1, dtype=np.int64)
@@ -157,7 +158,7 @@ def _merge(
     off = np.zeros(len(sizes) + 1, dtype=np.int64)
     np.cumsum(sizes, out=off[1:])
     off, fv = take_loops(off, fv, np.flatnonzero(kept))
-    used = np.unique(fv)
+    used = _unique(fv)
     remap = np.full(nc, -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
     return Q[used], off, remap[fv], kept

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..util.arrays import unique as _unique
 from .domains import _nearest_sides
 from .polymesh import MeshError
 
@@ -75,7 +76,7 @@ def _triangulate(seeds: FloatArray, centre: FloatArray, radius: float) -> _Trian
     pts = np.vstack([seeds, far])
     tri = Delaunay(pts)
     if len(tri.coplanar):
-        bad = np.unique(tri.coplanar[:, 0])
+        bad = _unique(tri.coplanar[:, 0])
         raise MeshError(f"seeds {bad[:10].tolist()} coincide with other seeds")
     S = tri.simplices.astype(np.int64)
     P = pts[S]

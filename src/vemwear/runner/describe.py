@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..util.arrays import unique as _unique
+
 if TYPE_CHECKING:
     from numpy.typing import NDArray
 
@@ -167,7 +169,7 @@ def _check_rows3d(cfg: Config) -> Rows:
     pr = cfg.problem
     m = pr.mesh
     nf = np.diff(m.cell_offsets)
-    counts = ", ".join(f"{n} faces: {int(np.sum(nf == n))}" for n in np.unique(nf))
+    counts = ", ".join(f"{n} faces: {int(np.sum(nf == n))}" for n in _unique(nf))
     h = float(m.cell_diameters.max())
     parts = ", ".join(f"{p} {len(m.part_faces(p))}" for p in m.part_names if len(m.part_faces(p)))
     faces = np.concatenate([m.part_faces(pc.part) for pc in pr.parts])

@@ -14,16 +14,23 @@
   32, 244, 137 and 140 bytes per N log2 N; SuperLU 26, 320 and 1612 MB up to 512 x 256,
   111, 301 and 339 bytes; ``python benchmarks/bench_estimate.py``: the estimates are
   1.1 to 1.4 times these peaks); in 3D (3 unknowns per vertex) the fill-in
-  of nested dissection grows as ``N^(4/3)``, not ``N log N``: about ``450 N^(4/3)``
-  bytes with PARDISO and ``1300 N^(4/3)`` with SciPy's SuperLU (measured on hexahedra
-  of the 2 x 1 x 1 box, 16 x 8 x 8, 32 x 16 x 16 and 48 x 24 x 24 cells, N = 4131,
-  28611 and 91875: PARDISO 134, 500 and 1869 MB peak, SuperLU 152, 1171 and 5474 MB,
-  against 130, 494 and 1967 MB and 186, 1238 and 5491 MB estimated with a base of 100
-  MB); the recovery of u, a block of right-hand sides and one of solutions
+  of nested dissection grows as ``N^(4/3)``, not ``N log N``, and with the number
+  ``z`` of vertices a vertex shares a cell with (itself included: 22-26 on hexahedra,
+  13.5 on Kuhn tetrahedra, 33 on prisms over Voronoi polygons, 66 on Voronoi
+  polyhedra; :func:`coupled_vertices`): about ``12 z N^(4/3)`` bytes with PARDISO and
+  ``35 z N^(4/3)`` with SciPy's SuperLU (``python benchmarks/bench_estimate3d.py``:
+  every 3D family at three sizes, the estimate over the peak in its table); the
+  dense Schur block on the ``c = d m`` contact dofs, ``20 c^2`` bytes (the block
+  PARDISO returns, its copy in the order of the contact dofs, its inverse in place:
+  on prisms, whose contact side is the whole base mesh, it is the largest term); the
+  recovery of u, a block of right-hand sides and one of solutions
   (``2 * 8 N`` bytes per stored level in the block, at most ``max(32, 2^20 / N)``
   levels); 24 bytes per time level (the time grid and
-  the level tables); the dense inverse of the contact block, ``3 * 8 m^2``; and, when
-  the run ends, the kept arrays in memory for ``result.npz`` (twice: read and written);
+  the level tables); and, when
+  the run ends, the kept arrays in memory for ``result.npz`` (twice: read and written).
+  Mesh generation and the diagnostics before the time loop peak below this: the
+  smallness estimate reads the run's own Schur block (a few dense products), and the
+  mesh generators' arrays are released before the factorization;
 * disk: ``result.h5`` (the kept contact rows, ``7 * 8 m`` bytes each, and the stored
   displacements, ``8 d n`` bytes each), ``result.npz`` (as much again), and the ParaView
   series (about ``16 n + 160 C`` bytes per stored displacement; ``24 n + 560 C`` in 3D:
@@ -41,7 +48,8 @@ Before they are built (:func:`vemwear.config.load_config`'s ``admit`` hook,
 a lower bound of the real one: the levels from ``[time]`` (exact), the cells the
 generator makes (0 for a mesh file, not known before it is read), ``C/2 + 1`` vertices
 for C cells (Euler's formula: no polygonal mesh has fewer; ``C/6 + 4`` in 3D, the
-vertices of Kuhn tetrahedra), the smaller factorization of the two backends, 2 contact
+vertices of Kuhn tetrahedra, each coupled with at least 4), the smaller
+factorization of the two backends, 2 contact
 nodes, ``ceil(L / every)`` kept rows and the stored displacements that ``store_u``
 certainly asks for. The estimate grows with every size (and the memory this process
 holds only grows meanwhile), so the rough estimate is at most the real-mesh one: it
@@ -59,12 +67,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..util.system import available_memory, free_disk, resident_memory
 
 if TYPE_CHECKING:
     from ..config import Config
     from ..config.build import Sizes
+    from ..mesh.polyhedra import Mesh3D
 
 __all__ = [
     "Estimate",
@@ -72,6 +82,7 @@ __all__ = [
     "admit_sizes",
     "base_memory",
     "check_estimate",
+    "coupled_vertices",
     "estimate",
     "estimate_config",
 ]
@@ -89,19 +100,51 @@ def base_memory() -> float:
 #: buffers with PARDISO (per unknown, up to a bound).
 _FACTOR_2D = {"pardiso": 160.0, "scipy": 400.0}
 _MKL_BUFFERS = (2000.0, 150e6)
-#: Bytes per ``N^(4/3)`` of the factorization in 3D, by resolved backend.
-_FACTOR_3D = {"pardiso": 450.0, "scipy": 1300.0}
+#: Bytes per ``N^(4/3)`` and per coupled vertex of the factorization in 3D, by
+#: resolved backend.
+_FACTOR_3D = {"pardiso": 12.0, "scipy": 35.0}
+#: The fewest vertices a vertex of a 3D mesh is coupled with (itself and the other
+#: vertices of its cells): a tetrahedron's four (the rough estimate's lower bound).
+_MIN_COUPLED_3D = 4.0
+#: Bytes per squared Schur dof: the dense Schur block on the contact dofs, its copy in
+#: their order and its inverse in place, about 2.5 blocks of ``8 c^2`` bytes at the peak.
+_SCHUR = 20.0
 
 
-def _factor_bytes(n: int, dim: int, backend: str) -> float:
+def _factor_bytes(n: int, dim: int, backend: str, coupled: float = 27.0) -> float:
     """The factorization's memory for n unknowns (the module docstring); ``backend``
-    ``"any"``: the smaller of the two (the rough estimate's lower bound)."""
+    ``"any"``: the smaller of the two (the rough estimate's lower bound); ``coupled``
+    (3D): the mean number of vertices a vertex shares a cell with, itself included."""
     if backend not in ("pardiso", "scipy"):
-        return min(_factor_bytes(n, dim, b) for b in ("pardiso", "scipy"))
+        return min(_factor_bytes(n, dim, b, coupled) for b in ("pardiso", "scipy"))
     if dim == 2:
         mkl = min(_MKL_BUFFERS[0] * n, _MKL_BUFFERS[1]) if backend == "pardiso" else 0.0
         return mkl + _FACTOR_2D[backend] * n * math.log2(n)
-    return _FACTOR_3D[backend] * float(n) ** (4 / 3)
+    return _FACTOR_3D[backend] * coupled * float(n) ** (4 / 3)
+
+
+def coupled_vertices(mesh: Mesh3D, sample: int = 4096) -> float:
+    """The mean number of vertices a vertex of ``mesh`` shares a cell with, itself
+    included (the nonzero 3 x 3 blocks of a row of K), over an evenly strided sample of
+    at most ``sample`` vertices: a fraction of a second on any mesh."""
+    off, ids = mesh.cell_vertex_offsets, mesh.cell_vertex_ids
+    cell_of = np.repeat(np.arange(len(off) - 1), np.diff(off))
+    order = np.argsort(ids, kind="stable")  # vertex -> its cells (CSR)
+    voff = np.searchsorted(ids[order], np.arange(mesh.n_points + 1))
+    picked = np.arange(0, mesh.n_points, max(1, mesh.n_points // sample))
+    if not len(picked):
+        return 0.0
+
+    def ranges(first: NDArray[np.int64], count: NDArray[np.int64]) -> NDArray[np.int64]:
+        """The concatenated ``first[i] + arange(count[i])``."""
+        return np.repeat(first - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
+
+    nc = voff[picked + 1] - voff[picked]
+    cells = cell_of[order[ranges(voff[picked], nc)]]
+    sizes = np.diff(off)[cells]
+    who = np.repeat(np.repeat(np.arange(len(picked)), nc), sizes)
+    keys = np.sort(who * np.int64(mesh.n_points) + ids[ranges(off[cells], sizes)])
+    return float(1 + np.count_nonzero(np.diff(keys))) / len(picked)
 
 
 class PlanError(ValueError):
@@ -138,6 +181,7 @@ def estimate(
     base: float | None = None,
     dim: int = 2,
     backend: str = "pardiso",
+    coupled: float = 27.0,
 ) -> Estimate:
     """Peak memory and disk of a run (the model of the module docstring).
 
@@ -160,6 +204,9 @@ def estimate(
     backend : str
         The resolved sparse backend (``pardiso`` or ``scipy``), or ``"any"``: the
         smaller factorization of the two.
+    coupled : float
+        3D: the mean number of vertices a vertex shares a cell with, itself included
+        (:func:`coupled_vertices`; 27 on hexahedra).
     """
     n = max(dim * points, 2)
     rows = kept * (7 * 8 * contact + 32)
@@ -171,10 +218,10 @@ def estimate(
     vtk = 16 * points + 160 * cells if dim == 2 else 24 * points + 560 * cells
     memory = (
         (base_memory() if base is None else base)
-        + _factor_bytes(n, dim, backend)
+        + _factor_bytes(n, dim, backend, coupled)
         + block
         + 24 * levels
-        + 24 * float(contact) ** 2
+        + _SCHUR * float(dim * contact) ** 2
         + (2 * arrays if npz else 0)
     )
     disk = arrays * (2 if npz else 1) + (stored_u * vtk if paraview else 0)
@@ -194,6 +241,7 @@ def _estimate_sizes(sizes: Sizes) -> Estimate:
         paraview=sizes.paraview,
         dim=sizes.dim,
         backend="any",
+        coupled=_MIN_COUPLED_3D,
     )
 
 
@@ -272,4 +320,5 @@ def estimate_config(cfg: Config, *, base: float | None = None) -> Estimate:
         base=base,
         dim=pr.dim,
         backend=resolve_backend(cfg.solver.backend),
+        coupled=coupled_vertices(pr.mesh) if pr.dim == 3 else 27.0,
     )

@@ -166,11 +166,17 @@ class Discretization:
         self._sliding_at: _Sliding | None = None
         self._sliding_prev: _Sliding | None = None
         self._K_cc = sp.csr_matrix((0, 0))
-        #: wall seconds of the phases done on this discretization: ``assembly`` (this
-        #: constructor), ``setup`` (the step solvers' factorizations), ``smallness``
-        #: (:meth:`smallness_estimate`); the time loop reports them as they were spent,
-        #: whoever asked first
+        #: wall seconds of the phases done on this discretization and not yet reported
+        #: by a run: ``assembly`` (this constructor), ``setup`` (a step solver's
+        #: factorization), ``smallness`` (:meth:`smallness_estimate`); the first run
+        #: reports them (:meth:`take_timings`), also when a diagnostic asked for them
+        #: before it, and a later run that reuses them spends none
         self.timings: dict[str, float] = {"assembly": time.perf_counter() - tick}
+
+    def take_timings(self) -> dict[str, float]:
+        """The phases of :attr:`timings` spent since the last call (then forgotten)."""
+        out, self.timings = self.timings, {}
+        return out
 
     def _contact_offset(self, cdofs: NDArray[np.int64]) -> NDArray[np.float64]:
         """``nu_a . u_c`` at the contact nodes from their prescribed components, which
@@ -229,7 +235,7 @@ class Discretization:
         if opts not in self._solvers:
             tick = time.perf_counter()
             self._solvers[opts] = opts.build(self.system)
-            self.timings["setup"] = time.perf_counter() - tick
+            self.timings["setup"] = self.timings.get("setup", 0.0) + time.perf_counter() - tick
         return self._solvers[opts]
 
     def release_solvers(self) -> None:
@@ -595,7 +601,9 @@ class Discretization:
         except Exception:
             return {"ratio": float("nan")}
         finally:
-            self.timings["smallness"] = time.perf_counter() - tick
+            self.timings["smallness"] = (
+                self.timings.get("smallness", 0.0) + time.perf_counter() - tick
+            )
         Lp = float(self.problem.law.lipschitz)
         value = Lp * float(np.abs(self.mu).max(initial=0)) * ratio
         if np.isfinite(value) and value >= 1.0:

@@ -23,6 +23,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polymesh import Mesh
+from ..util.arrays import unique as _unique
 from .local import Material
 from .local2 import (
     ElementWork,
@@ -414,8 +415,8 @@ def facet_dofs2(mesh: Mesh, edges: NDArray[np.int64]) -> tuple[NDArray[np.int64]
     and edge means): the dofs to clamp or prescribe on a part."""
     num = numbering2(mesh)
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
-    verts = np.unique(edges)
-    e = np.unique(edge_ids(mesh, edges[:, 0], edges[:, 1]))
+    verts = _unique(edges)
+    e = _unique(edge_ids(mesh, edges[:, 0], edges[:, 1]))
     return tuple(np.concatenate([2 * verts + c, num.edge_offset + 2 * e + c]) for c in range(2))
 
 

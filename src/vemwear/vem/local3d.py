@@ -38,6 +38,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polyhedra import Mesh3D
+from ..util.arrays import unique as _unique
 from .local import STABILIZATIONS, Material
 from .quadrature3d import (
     Field3,
@@ -109,7 +110,7 @@ class CellGeometry(NamedTuple):
         ``vertices`` and ``q``."""
         sizes = self.sizes
         out = {}
-        for n in np.unique(sizes):
+        for n in _unique(sizes):
             ids = np.flatnonzero(sizes == n)
             out[int(n)] = (ids, self.offsets[ids][:, None] + np.arange(n))
         return out

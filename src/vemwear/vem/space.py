@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polyhedra import Mesh3D
 from ..mesh.polymesh import Mesh
+from ..util.arrays import unique as _unique
 from .assembly import body_force_vector, edge_load_vector, stiffness
 from .dofs2 import (
     GAUSS3,
@@ -179,7 +180,7 @@ class P1Space:
 
     def component_dofs(self, edges: NDArray[np.int64]) -> tuple[NDArray[np.int64], ...]:
         """For each component, the dofs at the vertices of the edges (sorted)."""
-        v = np.unique(np.asarray(edges, dtype=np.int64))
+        v = _unique(np.asarray(edges, dtype=np.int64))
         return (2 * v, 2 * v + 1)
 
     def component_values(

@@ -24,6 +24,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polyhedra import Mesh3D
+from ..util.arrays import unique as _unique
 from .local import Material
 from .local3d import (
     CellGeometry,
@@ -116,7 +117,7 @@ class P1Space3D:
         sizes = m.face_sizes[f]
         starts = m.face_offsets[f]
         idx = np.repeat(starts - np.cumsum(sizes) + sizes, sizes) + np.arange(int(sizes.sum()))
-        return np.unique(m.face_vertices[idx])
+        return _unique(m.face_vertices[idx])
 
     def component_dofs(self, faces: NDArray[np.int64]) -> tuple[NDArray[np.int64], ...]:
         """For each component, the dofs at the vertices of the faces (sorted)."""
@@ -177,7 +178,7 @@ class P1Space3D:
         e, _ = self._face_entries(faces)
         fv = self.mesh.face_vertices[e]
         w = np.bincount(fv, self.faces.weights[e], minlength=self.mesh.n_points).astype(float)
-        bad = np.unique(fv[w[fv] <= 0])
+        bad = _unique(fv[w[fv] <= 0])
         if bad.size:
             raise ValueError(
                 f"contact weights <= 0 at vertices {bad[:10].tolist()}: faces too distorted "

@@ -37,6 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from ...util.arrays import unique as _unique
 from ..threads import solver_threads
 from .base import compliance_from_schur
 
@@ -277,7 +278,7 @@ class PardisoSchur:
         n = K.shape[0]
         last = np.asarray(last, dtype=np.int64).ravel()
         c = len(last)
-        if len(np.unique(last)) != c:
+        if len(_unique(last)) != c:
             raise ValueError("Schur dofs: the list of contact dofs has repeated entries")
         U = _upper(sp.csr_matrix(K, dtype=np.float64))
         perm = np.zeros(n, dtype=np.int32)
