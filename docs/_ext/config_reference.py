@@ -19,6 +19,11 @@ SECTIONS: tuple[tuple[str, str, str], ...] = (
     ("boundary", "`[boundary]`", "Boundary parts by side or by the mesh file's groups."),
     ("boundary.displacement", "`[[boundary.displacement]]`", "Prescribed displacements."),
     ("boundary.traction", "`[[boundary.traction]]`", "Tractions on named parts."),
+    (
+        "boundary.rigid",
+        "`[[boundary.rigid]]`",
+        "Rigid parts: a holder that translates as one body, loaded or prescribed.",
+    ),
     ("material", "`[material]`", "Lamé coefficients of the body."),
     ("vem", "`[vem]`", "The virtual element space."),
     ("loads", "`[loads]`", "Body force f1 and the traction f2."),
@@ -26,6 +31,11 @@ SECTIONS: tuple[tuple[str, str, str], ...] = (
     ("contact.p", "`[contact] p`", "The compliance law p(r) of the soft layer, by `type`:"),
     ("contact.table", "`[contact]` tables", "A coefficient given as a table along the boundary:"),
     ("contact.v_star", "`[contact] v_star` as a table", "The foundation velocity in time:"),
+    (
+        "contact.rotation",
+        "`[contact] v_star` as a rotation",
+        "A counterface turning about an axis:",
+    ),
     ("time", "`[time]`", "The time grid, in one of its forms."),
     ("time.cycle_jump", "`[time] cycle_jump`", "Cycle jumps of a periodic history."),
     ("solver", "`[solver]`", "The step solver."),

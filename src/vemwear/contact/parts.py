@@ -148,8 +148,10 @@ def tangential_velocity(
     t: float,
     points: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """``v*(x_a, t) · tau_a`` at every contact node, with the v* of the node's part
-    (``points``, the nodes, are needed for a v* that is a field).
+    """The tangential foundation velocity ``v*(x_a, t) · tau_a`` at every contact node.
+
+    Each node takes the v* of its part; ``points``, the nodes, are needed for a v* that
+    is a field.
 
     The tangential part of the foundation velocity is ``v*_tau = (v* . tau_a) tau_a``
     in 2D; its sign gives the friction direction ``n* = -v*_tau / |v*_tau|`` and its
@@ -163,7 +165,7 @@ def tangential_velocity(
 
 
 def tangential_components(v: NDArray[np.float64], tangents: NDArray[np.float64]) -> NDArray:
-    """``v_a . tau_a`` of (m, d) velocities and tangents, component by component."""
+    """The products ``v_a · tau_a`` of (m, d) velocities and tangents, node by node."""
     if tangents.shape[1] != v.shape[1]:
         raise ValueError(
             f"v_star has {v.shape[1]} components, the contact tangents {tangents.shape[1]}"
