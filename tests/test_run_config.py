@@ -45,3 +45,21 @@ def test_run_config_refuses_before_any_work(tmp_path: Path) -> None:
     with pytest.raises(PlanError, match="of memory"):
         vemwear.run_config(cfg, tmp_path / "out", progress=False)
     assert not (tmp_path / "out").exists()
+
+
+def test_every_step_solver_offers_the_protocol_of_the_time_loop() -> None:
+    """run_levels asks batch, predicts and setup_timings instead of probing attributes."""
+    import tomllib
+
+    from conftest import levels_mod  # noqa: F401 - the loop's module is importable
+    from vemwear.config import parse_config
+    from vemwear.simulate import SolverOptions
+    from vemwear.solvers import SOLVERS
+    from vemwear.solvers.protocol import StepSolver
+
+    cfg = parse_config(tomllib.loads(small_config("p", output=OFF)))
+    d = cfg.problem.discrete
+    for method in SOLVERS:
+        s = d.step_solver(SolverOptions(method=method))
+        assert isinstance(s, StepSolver), method
+        assert s.batch == (method == "newton") and isinstance(s.setup_timings, dict)

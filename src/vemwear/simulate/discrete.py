@@ -21,6 +21,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..contact import ContactBoundary, tangential_velocity, velocity_levels
+from ..solvers.protocol import StepSolver
 from ..solvers.system import ContactSystem, StepData, StepSolution
 
 if TYPE_CHECKING:
@@ -192,7 +193,7 @@ class Discretization:
                     )
         return off
 
-    def step_solver(self, opts: Any) -> Any:
+    def step_solver(self, opts: Any) -> StepSolver:
         """The step solver of ``opts`` on this system, built once (one factorization of
         K however many runs use it, e.g. the cycles of a cycle jump)."""
         if opts not in self._solvers:

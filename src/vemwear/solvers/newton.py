@@ -304,6 +304,14 @@ class CondensedNewton:
         nodes (:data:`.pieces.MIN_WIDTH`)."""
         return self.system.p.piecewise_linear and block_width(self.system.m) >= MIN_WIDTH
 
+    #: Recovers many levels in one block solve (:class:`.protocol.BatchStepSolver`).
+    batch = True
+
+    @property
+    def setup_timings(self) -> dict[str, float]:
+        """Wall times of the factorization's parts."""
+        return dict(getattr(self.factor, "timings", {}))
+
     @property
     def predictor(self) -> PiecePredictor:
         """The runs of levels on one piece (made at the first use)."""
@@ -458,6 +466,10 @@ class FullNewton:
     """Semismooth Newton on all free dofs (the plain path): a new sparse LU per iteration."""
 
     method = "newton-full"
+    #: No block recovery, no prediction, no set-up (a new LU per iteration).
+    batch = False
+    predicts = False
+    setup_timings: dict[str, float] = {}  # noqa: RUF012 - read only
 
     def __init__(self, system: ContactSystem, options: NewtonOptions | None = None) -> None:
         self.system = system

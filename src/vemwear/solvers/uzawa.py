@@ -43,6 +43,9 @@ class Uzawa:
     """Uzawa iteration for the step problem; K factorized once per simulation."""
 
     method = "uzawa"
+    #: No block recovery, no prediction (:class:`.protocol.StepSolver`).
+    batch = False
+    predicts = False
 
     def __init__(self, system: ContactSystem, options: UzawaOptions | None = None) -> None:
         self.system = system
@@ -52,6 +55,11 @@ class Uzawa:
         L = system.p.lipschitz if np.isfinite(system.p.lipschitz) else 1.0
         self.rho1 = 1.0 / self.norm_C
         self.rho2 = 1.0 / (1.0 + L * self.norm_C)
+
+    @property
+    def setup_timings(self) -> dict[str, float]:
+        """Wall times of the factorization's parts."""
+        return dict(getattr(self.factor, "timings", {}))
 
     def _compliance_norm(self, iterations: int = 50) -> float:
         """Largest eigenvalue of ``W^(1/2) C_NN W^(1/2)``, by power iteration."""
