@@ -144,6 +144,7 @@ def run_config(
     from .outdir import refuse_locked, stale_temporaries
     from .plan import admit_sizes, check_estimate, estimate_config
     from .run import ResumeError, RunComplete, abandon_run, execute_run, prepare_run
+    from .signals import check_stop
 
     t0 = time.perf_counter()
     tell = say or (lambda line: None)
@@ -166,6 +167,7 @@ def run_config(
             f"{stale[0].name}); remove them with: vemwear clean {outdir}"
         )
         caution(f"warning: {outcome.warnings[-1]}")
+    check_stop()  # safe points between the phases of the set-up
     est = estimate_config(cfg)
     if not force_size:
         check_estimate(est, out, str(config), have=have)
@@ -179,6 +181,7 @@ def run_config(
         return outcome
     outcome.out = plan.out
     try:  # assembles the stiffness: may fail before any level, like the run
+        check_stop()
         if plan.note:
             caution(plan.note)
         _, small = smallness_report(cfg.problem)
@@ -187,6 +190,7 @@ def run_config(
                 outcome.warnings.append(w)
                 caution(f"warning: {w}")
         tell(f"{cfg.title}: " + ", ".join(f"{k} {v}" for k, v in est.rows()))
+        check_stop()
     except BaseException:
         abandon_run(plan)
         raise
