@@ -160,10 +160,13 @@ def check_scales(src: str, mesh: Any, c: s.ConfigFile) -> None:
             f"compute with (its cell measures and the stiffness under- or overflow); use "
             f"units in which its size lies between {lo:g} and {hi:g}"
         )
-    g = c.contact.g
-    if isinstance(g, int | float) and not abs(g) <= hi:
-        raise ConfigError(
-            f"{src}: [contact] g = {g:g} is too large to compute with (the layer's "
-            f"penetrations and the law p(r) on them overflow); use units in which it is at "
-            f"most {hi:g}"
-        )
+    parts = c.contact if isinstance(c.contact, list) else [c.contact]  # [[contact]] parts
+    for i, part in enumerate(parts):
+        g = getattr(part, "g", None)
+        if isinstance(g, int | float) and not abs(g) <= hi:
+            where = "[contact]" if len(parts) == 1 else f"[[contact]] {i + 1}"
+            raise ConfigError(
+                f"{src}: {where} g = {g:g} is too large to compute with (the layer's "
+                f"penetrations and the law p(r) on them overflow); use units in which it is "
+                f"at most {hi:g}"
+            )
