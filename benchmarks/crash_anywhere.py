@@ -187,19 +187,21 @@ class Trial:
     why: str
 
 
-def _kill(cmd: list[str], delay: float, sig: signal.Signals) -> tuple[int | None, float]:
+def _kill(cmd: list[str], delay: float, sig: signal.Signals) -> tuple[int | None, float, str]:
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_env())
     time.sleep(delay)
     t0 = time.monotonic()
     if proc.poll() is None:
         proc.send_signal(sig)
+    err = b""
     try:
-        proc.communicate(timeout=60)
+        _, err = proc.communicate(timeout=60)
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
-    return proc.returncode, time.monotonic() - t0
+    last = err.decode(errors="replace").strip().splitlines()[-1:] if err else []
+    return proc.returncode, time.monotonic() - t0, last[0] if last else ""
 
 
 def _no_stray(out: Path, names: set[str]) -> str:
@@ -223,11 +225,11 @@ def trial(
         cmd = _cmd("export", str(out))
     else:
         cmd = _cmd("run", str(ref.config), "-o", str(out), "--no-progress")
-    rc, stop = _kill(cmd, delay, sig)
+    rc, stop, said = _kill(cmd, delay, sig)
     state = "export" if kind == "export" else _state(out, rc)
     why = ""
     if sig == signal.SIGTERM and rc not in (0, 130, -signal.SIGTERM):
-        why = f"SIGTERM: exit {rc}"
+        why = f"SIGTERM: exit {rc}: {said[-300:]}"
     elif sig == signal.SIGTERM and rc != 0 and stop > STOP_WITHIN:
         why = f"SIGTERM took {stop:.2f} s"  # (a command that completed is not stopped)
     if not why:
