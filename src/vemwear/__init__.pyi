@@ -17,6 +17,7 @@ from .mesh import voronoi_mesh as voronoi_mesh
 from .mesh import write_mesh as write_mesh
 from .post.results import load_result as load_result
 from .post.results import save_result as save_result
+from .runner import run_config as run_config
 from .simulate import Problem as Problem
 from .simulate import Result as Result
 from .simulate import SolverOptions as SolverOptions

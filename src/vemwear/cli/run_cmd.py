@@ -11,13 +11,12 @@ from __future__ import annotations
 
 import argparse
 import time
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .common import EXIT_OK, PROG, UsageError, add_common_options, rows_text, say
+from .common import EXIT_OK, PROG, add_common_options, rows_text, say
 
 if TYPE_CHECKING:
-    from ..simulate import SolverOptions
+    pass
 
 __all__ = [
     "CHECK_SUMMARY",
@@ -71,123 +70,68 @@ def setup_schema(p: argparse.ArgumentParser) -> None:
 
 
 # ---------------------------------------------------------------------------- commands
-def _solver_options(base: SolverOptions, method: str | None) -> SolverOptions:
-    from ..simulate import SolverOptions
-
-    if method is None or method == base.method:
-        return base
-    # keep tol and backend; iteration limits of different methods are not comparable
-    return SolverOptions(method=method, tol=base.tol, max_iter=None, backend=base.backend)
-
-
 def cmd_run(args: argparse.Namespace) -> int:
-    """``vemwear run CONFIG -o OUTDIR [--resume]``: validate, solve, write, summarize.
-
-    The order keeps every refusal cheap: a locked OUTDIR before the file is read, the
-    rough plan before the mesh is built, the plan of the real mesh and the output
-    directory (taking its lock) before the stiffness is assembled."""
-    from ..config import load_config
-    from ..runner import abandon_run, execute_run, prepare_run, result_rows, smallness_report
-    from ..runner.outdir import refuse_locked, stale_temporaries
-    from ..runner.plan import admit_sizes, check_estimate, estimate_config
-    from ..runner.run import RunComplete
+    """``vemwear run CONFIG -o OUTDIR [--resume]``: :func:`vemwear.runner.run_config`
+    (which owns the order of the checks), then its outcome printed."""
+    from ..runner import result_rows, run_config
 
     t0 = time.perf_counter()
-    refuse_locked(args.outdir)
-    # on --resume, the disk that result.h5 takes already is not asked for again
-    have = _resumed_bytes(args.outdir) if args.resume else 0
-    admit = admit_sizes(args.outdir, force_size=args.force_size, have=have)
-    cfg = load_config(args.config, admit=admit)
-    solver = _solver_options(cfg.solver, args.solver)
-    if cfg.cycles is not None and args.resume:
-        raise UsageError("--resume: a run with [time] cycle_jump is not checkpointed; run it again")
-    stale = [] if args.force else stale_temporaries(args.outdir)
-    if stale:
-        say(
-            f"{PROG}: warning: {len(stale)} temporary file(s) of killed runs in or next to "
-            f"{args.outdir} (e.g. {stale[0].name}); remove them with: vemwear clean {args.outdir}"
-        )
-    est = estimate_config(cfg)
-    if not args.force_size:
-        check_estimate(est, args.outdir, str(args.config), have=have)
-    try:  # the output directory, its lock and the checkpoint, before solving
-        plan = prepare_run(
-            cfg,
-            args.config,
-            args.outdir,
-            solver,
-            force=args.force,
-            resume=args.resume,
-            solver_flag=args.solver,
-        )
-    except RunComplete as done:
-        print(f"{PROG}: {done}")
+    outcome = run_config(
+        args.config,
+        args.outdir,
+        resume=args.resume,
+        force=args.force,
+        progress=not args.no_progress,
+        solver=args.solver,
+        force_size=args.force_size,
+        say=lambda line: print(f"{PROG}: {line}", flush=True),
+        warn=lambda line: say(f"{PROG}: {line}"),
+    )
+    title, result, cres = outcome.title, outcome.result, outcome.cycles
+    if result is None and cres is None:  # complete already, or result.h5 alone
+        if outcome.config is None or (
+            outcome.resumed_from is None and "result.h5" not in (outcome.note)
+        ):
+            print(f"{PROG}: {outcome.note}")
+        else:
+            print(f"{PROG}: {title}: done; {outcome.note}")
         return EXIT_OK
-    if plan.note:
-        say(f"{PROG}: {plan.note}")
-    try:  # assembles and factorizes (the run's set-up): may fail before any level
-        _, warning = smallness_report(cfg.problem, plan.solver)
-        for w in [warning, *_overshoot(cfg)]:
-            if w:
-                say(f"{PROG}: warning: {w}")
-        print(f"{PROG}: {cfg.title}: " + ", ".join(f"{k} {v}" for k, v in est.rows()), flush=True)
-    except BaseException:
-        abandon_run(plan)
-        raise
-    if cfg.cycles is not None:
-        from ..runner.cycles import execute_cycles
-        from ..runner.describe import part_wear_rows
-
-        _last, cres = execute_cycles(plan, progress=not args.no_progress)
-        print(
-            f"{PROG}: {cfg.title}: done\n"
-            + rows_text(
-                [
-                    (
-                        "cycles",
-                        f"{cfg.cycles.cycles}, {len(cres.computed)} computed (jump "
-                        f"{cfg.cycles.jump}, max increment {cfg.cycles.max_increment:g} g)",
-                    ),
-                    ("max wear", f"{float(cres.wear[-1].max(initial=0.0)):.6g}"),
-                    *part_wear_rows(cfg.problem, cres.wear[-1]),
-                    ("time", f"{time.perf_counter() - t0:.2f} s"),
-                    ("output", str(plan.out)),
-                ]
-            )
-        )
+    elapsed = ("time", f"{time.perf_counter() - t0:.2f} s")
+    if result is None:  # a cycle-jump run
+        assert cres is not None and outcome.config is not None
+        print(f"{PROG}: {title}: done\n" + rows_text(_cycle_rows(outcome, elapsed)))
         return EXIT_OK
-    result = execute_run(plan, progress=not args.no_progress)
-    if isinstance(result, str):  # the arrays do not fit in memory: result.h5 only
-        print(f"{PROG}: {cfg.title}: done; {result}")
-        return EXIT_OK
-    rows = [
-        *result_rows(result),
-        ("time", f"{time.perf_counter() - t0:.2f} s"),
-        ("output", str(plan.out)),
-    ]
-    text = f"{PROG}: {cfg.title}: done\n" + rows_text(rows)
-    if plan.state is not None:
-        text += f"\n  resumed from level {plan.state.completed}"
+    rows = [*result_rows(result), elapsed, ("output", str(outcome.out))]
+    text = f"{PROG}: {title}: done\n" + rows_text(rows)
+    if outcome.resumed_from is not None:
+        text += f"\n  resumed from level {outcome.resumed_from}"
     print(text)
     return EXIT_OK
 
 
-def _resumed_bytes(outdir: str | Path) -> int:
-    """The disk that the ``result.h5`` a resumed run goes on writing occupies already (its
-    allocated blocks; 0 if there is none)."""
-    from ..post.stream import STREAM_NAME
+def _cycle_rows(outcome: Any, elapsed: tuple[str, str]) -> list[tuple[str, str]]:
+    """The summary rows of a cycle-jump run."""
+    from ..runner.describe import part_wear_rows
 
-    try:
-        st = (Path(outdir).expanduser() / STREAM_NAME).stat()
-    except OSError:
-        return 0
-    return min(st.st_size, 512 * st.st_blocks)
+    cfg, cres = outcome.config, outcome.cycles
+    return [
+        (
+            "cycles",
+            f"{cfg.cycles.cycles}, {len(cres.computed)} computed (jump "
+            f"{cfg.cycles.jump}, max increment {cfg.cycles.max_increment:g} g)",
+        ),
+        ("max wear", f"{float(cres.wear[-1].max(initial=0.0)):.6g}"),
+        *part_wear_rows(cfg.problem, cres.wear[-1]),
+        elapsed,
+        ("output", str(outcome.out)),
+    ]
 
 
 def cmd_check(args: argparse.Namespace) -> int:
     """``vemwear check CONFIG``: validate and describe the problem, no solve."""
     from ..config import load_config
     from ..runner import check_rows, smallness_report
+    from ..runner.entry import overshoot_lines
     from ..runner.plan import admit_sizes, check_estimate, estimate_config
 
     cfg = load_config(args.config, admit=admit_sizes(force_size=args.force_size))
@@ -199,18 +143,10 @@ def cmd_check(args: argparse.Namespace) -> int:
     rows.append(("smallness (Thm 3.4)", row))
     rows += est.rows()
     print(f"{PROG}: {args.config}: {cfg.title}: valid\n" + rows_text(rows))
-    for w in [warning, *_overshoot(cfg)]:
+    for w in [warning, *overshoot_lines(cfg)]:
         if w:
             say(f"{PROG}: warning: {w}")
     return EXIT_OK
-
-
-def _overshoot(cfg: Any) -> list[str]:
-    """The warning of the explicit wear rule's overshoot, if any."""
-    from ..simulate.explicit import overshoot_warning
-
-    w = overshoot_warning(cfg.problem)
-    return [w] if w else []
 
 
 def cmd_schema(args: argparse.Namespace) -> int:

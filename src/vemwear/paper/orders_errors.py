@@ -153,6 +153,7 @@ def run_final(
     L = len(pr.time.t)
     step = d.step_data(L - 1, res.wear[-1])
     full = d.step_solver(opts).solve(step, sol, recover=True)
+    assert full.u is not None  # recovered
     dofs = d.full_dofs(full.u, step.t)
     vert = pr.space.vertex_values(dofs)
     scale = max(float(np.abs(res.u[-1]).max()), 1e-300)

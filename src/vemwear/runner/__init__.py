@@ -22,11 +22,14 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from .describe import check_rows, result_rows, smallness_report
+    from .entry import RunOutcome, run_config
     from .outdir import OutputDirError, atomic_output_dir, check_output_dir
     from .run import ResumeError, RunPlan, abandon_run, execute_run, prepare_run
     from .signals import Terminated, signals_as_interrupts
 
 _WHERE = {
+    "RunOutcome": "entry",
+    "run_config": "entry",
     "check_rows": "describe",
     "result_rows": "describe",
     "smallness_report": "describe",
@@ -44,6 +47,7 @@ _WHERE = {
 __all__ = [
     "OutputDirError",
     "ResumeError",
+    "RunOutcome",
     "RunPlan",
     "Terminated",
     "abandon_run",
@@ -53,6 +57,7 @@ __all__ = [
     "execute_run",
     "prepare_run",
     "result_rows",
+    "run_config",
     "signals_as_interrupts",
     "smallness_report",
 ]

@@ -55,7 +55,7 @@ from .outdir import (
     refuse_locked,
     write_marker,
 )
-from .signals import saving, stop_reason
+from .signals import check_stop, saving, stop_reason
 
 if TYPE_CHECKING:
     from ..config import Config
@@ -119,6 +119,7 @@ class _WearGuard:
         return getattr(self._sink, name)
 
     def level(self, n: int, w: Any, solution: Any) -> None:
+        check_stop()  # a safe point of every level
         if np.any(w > self._g):
             raise _worn_through(self._problem, n, w, self._g)
         self._sink.level(n, w, solution)

@@ -29,6 +29,7 @@ from ..contact import (
     tangential_velocity,
     velocity_levels,
 )
+from ..solvers.protocol import StepSolver
 from ..solvers.system import ContactSystem, StepData, StepSolution
 from .constraints import describe_motions
 
@@ -229,7 +230,7 @@ class Discretization:
                     )
         return off
 
-    def step_solver(self, opts: Any) -> Any:
+    def step_solver(self, opts: Any) -> StepSolver:
         """The step solver of ``opts`` on this system, built once (one factorization of
         K however many runs use it, e.g. the cycles of a cycle jump)."""
         if opts not in self._solvers:

@@ -16,12 +16,13 @@ from __future__ import annotations
 import time
 from collections import deque
 from collections.abc import Callable, Iterable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..solvers import StepSolution
+from ..solvers.protocol import BatchStepSolver, StepSolver
 from ..solvers.system import ConvergenceError, StepData, check_converged, kkt_residuals_block
 from ..solvers.threads import solver_threads
 from .stream import LevelSink, LoopState, Pending, StoragePlan
@@ -120,12 +121,12 @@ def run_levels(
     timings = {} if timings is None else timings
     d = problem.discrete
     sysm = d.system
-    step_solver: Any = d.step_solver(opts)
+    step_solver: StepSolver = d.step_solver(opts)
     # the phases this run spent, also when a diagnostic asked for them before it; none
     # when an earlier run in this process did (its factorization reused)
     timings.update({"assembly": 0.0, "setup": 0.0})
     timings.update(d.take_timings())
-    for k, v in getattr(getattr(step_solver, "factor", None), "timings", {}).items():
+    for k, v in step_solver.setup_timings.items():
         timings[f"setup_{k}"] = v
 
     tgrid = problem.time.t
@@ -137,7 +138,9 @@ def run_levels(
     # (completed, w of the next level, warm start): replaced as one tuple, so that a
     # signal arriving between two statements never sees a half-updated state
     now: tuple[int, Any, StepSolution | None] = (state.completed, state.w, state.guess)
-    batch = hasattr(step_solver, "recover_many")
+    batch = step_solver.batch
+    # the block recovery and the prediction of the condensed Newton (batch solvers only)
+    batched = cast(BatchStepSolver, step_solver)
     # (level, its w, its step data, its solution) awaiting a block of back-substitutions
     pending: list[tuple[int, Any, StepData, StepSolution]] = [
         (p.level, p.w, d.step_data(p.level, p.w), p.solution) for p in state.pending
@@ -163,6 +166,7 @@ def run_levels(
         if not batch:  # a resumed run whose pending levels another solver left
             for n_, _, st, so in pending:
                 full_sol = step_solver.solve(st, so, recover=True)
+                assert full_sol.u is not None  # recovered
                 res = np.array([full_sol.residuals[k] for k in RESIDUAL_NAMES])
                 give(n_, d.full_dofs(full_sol.u, st.t), res)
             pending.clear()
@@ -173,9 +177,9 @@ def run_levels(
         p_rigids = [so.p_rigid for *_, so in pending]
         p_softs = [so.p_soft for *_, so in pending]
         ys = [so.u_nu for *_, so in pending]
-        X = step_solver.recover_many(steps, p_rigids, p_softs, out=block[:, : len(pending)], ys=ys)
+        X = batched.recover_many(steps, p_rigids, p_softs, out=block[:, : len(pending)], ys=ys)
         # feasibility and complementarity over the scale of the normal displacements
-        y_refs = step_solver.displacement_scales(steps, ys, p_rigids, p_softs)
+        y_refs = batched.displacement_scales(steps, ys, p_rigids, p_softs)
         fulls = kkt_residuals_block(sysm, steps, X, p_rigids, y_refs, opts.tol)
         rows = sink_rows([n_ for n_, *_ in pending]) if sink_rows is not None else None
         U = d.full_dofs_block(X, [st.t for _, _, st, _ in pending], out=rows)
@@ -200,8 +204,8 @@ def run_levels(
     # as long as the friction stays the same; each level has the same numbers as in
     # any other run, so a resumed run stays bitwise the same
     # (not with wear on the whole pressure: a run's wear update takes p_soft alone)
-    runs = d.constant_load and d.wear_total is None and getattr(step_solver, "predicts", False)
-    predict: Any = step_solver.predict if runs else None
+    runs = d.constant_load and d.wear_total is None and step_solver.predicts
+    predict: Any = batched.predict if runs else None
     # (step data, solution, w^{n+1} or None) of the predicted levels not yet handed on
     ahead: deque[tuple[StepData, StepSolution, Any]] = deque()
 

@@ -40,6 +40,10 @@ class FullNewton:
     """Semismooth Newton on all free dofs (the plain path): a new sparse LU per iteration."""
 
     method = "newton-full"
+    #: No block recovery, no prediction, no set-up (a new LU per iteration).
+    batch = False
+    predicts = False
+    setup_timings: dict[str, float] = {}  # noqa: RUF012 - read only
 
     def __init__(self, system: ContactSystem, options: NewtonOptions | None = None) -> None:
         self.system = system

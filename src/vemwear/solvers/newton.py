@@ -353,6 +353,14 @@ class CondensedNewton:
             and block_width(self.system.m) >= MIN_WIDTH
         )
 
+    #: Recovers many levels in one block solve (:class:`.protocol.BatchStepSolver`).
+    batch = True
+
+    @property
+    def setup_timings(self) -> dict[str, float]:
+        """Wall times of the factorization's parts."""
+        return dict(getattr(self.factor, "timings", {}))
+
     @property
     def predictor(self) -> PiecePredictor:
         """The runs of levels on one piece (made at the first use)."""

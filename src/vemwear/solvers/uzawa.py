@@ -59,6 +59,9 @@ class Uzawa:
     """Uzawa iteration for the step problem; K factorized once per simulation."""
 
     method = "uzawa"
+    #: No block recovery, no prediction (:class:`.protocol.StepSolver`).
+    batch = False
+    predicts = False
 
     def __init__(self, system: ContactSystem, options: UzawaOptions | None = None) -> None:
         self.system = system
@@ -74,6 +77,11 @@ class Uzawa:
         self.rho1 = 1.0 / self.norm_C
         self.rho2 = 1.0 / (1.0 + L * self.norm_C)
         self._q = np.zeros(system.m)  # the soft layer's multiplier of the last iteration
+
+    @property
+    def setup_timings(self) -> dict[str, float]:
+        """Wall times of the factorization's parts."""
+        return dict(getattr(self.factor, "timings", {}))
 
     def _compliance_norm(self, iterations: int = 50) -> float:
         """Largest eigenvalue of ``W^(1/2) C_NN W^(1/2)``, by power iteration."""

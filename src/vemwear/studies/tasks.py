@@ -53,29 +53,22 @@ def _wait_unlocked(rundir: Path) -> None:
 
 
 def _execute(config_path: Path, rundir: Path) -> Any:
-    """One run of ``config_path`` into ``rundir`` through :mod:`vemwear.runner`:
-    resumed from its checkpoint if a stopped attempt left one, else from the start.
-    Returns the result (None for a cycle-jump run, whose result is in its files)."""
-    from ..config import load_config
-    from ..runner import ResumeError, execute_run, prepare_run
+    """One run of ``config_path`` into ``rundir`` by :func:`vemwear.runner.run_config`
+    (the plan's refusals and the warnings as for ``vemwear run``): resumed from its
+    checkpoint if a stopped attempt left one, else from the start. Returns the result
+    (None for a cycle-jump run, whose result is in its files)."""
+    from ..runner import ResumeError, run_config
     from ..runner.checkpoint import CHECKPOINT_NAME
 
-    cfg = load_config(config_path)
-    plan = None
-    if cfg.cycles is None and (rundir / CHECKPOINT_NAME).is_file():
+    outcome = None
+    if (rundir / CHECKPOINT_NAME).is_file():
         with contextlib.suppress(ResumeError):
-            plan = prepare_run(cfg, config_path, rundir, cfg.solver, resume=True)
-    if plan is None:
-        plan = prepare_run(cfg, config_path, rundir, cfg.solver, force=True)
-    if cfg.cycles is not None:
-        from ..runner.cycles import execute_cycles
-
-        execute_cycles(plan, progress=False)
-        return None
-    result = execute_run(plan, progress=False)
-    if isinstance(result, str):  # the arrays did not fit in memory: result.h5 only
-        raise RunFailed(result)
-    return result
+            outcome = run_config(config_path, rundir, resume=True, progress=False)
+    if outcome is None:
+        outcome = run_config(config_path, rundir, force=True, progress=False)
+    if outcome.result is None and outcome.cycles is None:  # result.h5 only
+        raise RunFailed(outcome.note)
+    return outcome.result
 
 
 #: What a task hands back besides the record: ``extract(result)``, e.g. the arrays the

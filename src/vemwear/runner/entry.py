@@ -1,0 +1,218 @@
+"""One run of a configuration file, from the cheap refusals to the outcome.
+
+:func:`run_config` is the library's entry point for a run: ``vemwear run`` calls it
+(parse, call, print) and so do the workers of a study. It owns the order in which a
+run is checked, so that every refusal is as cheap as it can be:
+
+1. a run holding OUTDIR's lock refuses before the configuration is even read;
+2. the rough plan (sizes read from the file alone) refuses before the mesh is built
+   (:func:`vemwear.runner.plan.admit_sizes`);
+3. the configuration is validated and built (mesh, time grid, data);
+4. the plan of the real mesh refuses before anything is assembled;
+5. the output directory is checked and locked, the checkpoint read on ``resume``
+   (:func:`vemwear.runner.run.prepare_run`);
+6. the warnings (stale temporaries, smallness of Theorem 3.4, overshooting wear steps)
+   and the plan's line are said;
+7. the levels are solved (or the cycles jumped: ``[time] cycle_jump``) and the outputs
+   written.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ..config import Config
+    from ..simulate import Result, SolverOptions
+    from ..simulate.cycles import CycleResult
+
+__all__ = ["RunOutcome", "overshoot_lines", "run_config"]
+
+
+@dataclass
+class RunOutcome:
+    """What :func:`run_config` did.
+
+    Attributes
+    ----------
+    title : str
+        The configuration's title.
+    out : Path
+        The output directory.
+    result : Result or None
+        The result (None for a cycle-jump run, a run that was complete already, or one
+        whose arrays did not fit in memory).
+    cycles : CycleResult or None
+        The cycles of a ``[time] cycle_jump`` run.
+    note : str
+        A line about the outcome (complete already; ``result.h5`` only).
+    resumed_from : int or None
+        The level a resumed run went on from.
+    warnings : list of str
+        The warnings said before the run.
+    seconds : float
+        Wall time.
+    config : Config or None
+        The validated configuration.
+    """
+
+    title: str
+    out: Path
+    result: Result | None = None
+    cycles: CycleResult | None = None
+    note: str = ""
+    resumed_from: int | None = None
+    warnings: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+    config: Config | None = None
+
+
+def _solver_options(base: SolverOptions, method: str | None) -> SolverOptions:
+    from ..simulate import SolverOptions
+
+    if method is None or method == base.method:
+        return base
+    # keep tol and backend; iteration limits of different methods are not comparable
+    return SolverOptions(method=method, tol=base.tol, max_iter=None, backend=base.backend)
+
+
+def _resumed_bytes(outdir: Path) -> int:
+    """The disk that the ``result.h5`` a resumed run goes on writing occupies already."""
+    from ..post.stream import STREAM_NAME
+
+    try:
+        st = (outdir / STREAM_NAME).stat()
+    except OSError:
+        return 0
+    return min(st.st_size, 512 * st.st_blocks)
+
+
+def run_config(
+    config: str | os.PathLike[str],
+    outdir: str | os.PathLike[str],
+    *,
+    resume: bool = False,
+    force: bool = False,
+    progress: bool = True,
+    solver: str | None = None,
+    force_size: bool = False,
+    say: Callable[[str], None] | None = None,
+    warn: Callable[[str], None] | None = None,
+) -> RunOutcome:
+    """Validate the configuration file ``config``, solve it and write into ``outdir``.
+
+    Parameters
+    ----------
+    config : path
+        The TOML configuration (docs/config.md).
+    outdir : path
+        The output directory (:mod:`vemwear.runner.outdir` says which it may use).
+    resume : bool
+        Go on from the checkpoint of a stopped run in ``outdir``.
+    force : bool
+        Replace the output of an earlier vemwear run in ``outdir``.
+    progress : bool
+        Show a progress bar.
+    solver : str, optional
+        Another solver method than the configuration's.
+    force_size : bool
+        Run even if the estimated memory or disk exceeds what is available.
+    say : callable, optional
+        Receives the plan's line (``"TITLE: memory (estimate) ..."``) before the levels
+        are solved.
+    warn : callable, optional
+        Receives the warnings (``"warning: ..."``) and notes as they come.
+
+    Returns
+    -------
+    RunOutcome
+
+    Raises
+    ------
+    ConfigError, PlanError, OutputDirError, ResumeError
+        A refused run (invalid input), before any solving.
+    ConvergenceError, WornThroughError, KeyboardInterrupt
+        A run that stopped; its finished levels are saved (``exc.vemwear_note``).
+    """
+    from ..config import load_config
+    from .describe import smallness_report
+    from .outdir import refuse_locked, stale_temporaries
+    from .plan import admit_sizes, check_estimate, estimate_config
+    from .run import ResumeError, RunComplete, abandon_run, execute_run, prepare_run
+    from .signals import check_stop
+
+    t0 = time.perf_counter()
+    tell = say or (lambda line: None)
+    caution = warn or (lambda line: None)
+    out = Path(outdir).expanduser()
+    refuse_locked(out)
+    # on --resume, the disk that result.h5 takes already is not asked for again
+    have = _resumed_bytes(out) if resume else 0
+    cfg = load_config(config, admit=admit_sizes(out, force_size=force_size, have=have))
+    options = _solver_options(cfg.solver, solver)
+    if cfg.cycles is not None and resume:
+        raise ResumeError(
+            "--resume: a run with [time] cycle_jump is not checkpointed; run it again"
+        )
+    outcome = RunOutcome(cfg.title, out.absolute(), config=cfg)
+    stale = [] if force else stale_temporaries(out)
+    if stale:
+        outcome.warnings.append(
+            f"{len(stale)} temporary file(s) of killed runs in or next to {outdir} (e.g. "
+            f"{stale[0].name}); remove them with: vemwear clean {outdir}"
+        )
+        caution(f"warning: {outcome.warnings[-1]}")
+    check_stop()  # safe points between the phases of the set-up
+    est = estimate_config(cfg)
+    if not force_size:
+        check_estimate(est, out, str(config), have=have)
+    try:
+        plan = prepare_run(
+            cfg, Path(config), out, options, force=force, resume=resume, solver_flag=solver
+        )
+    except RunComplete as done:
+        outcome.note = str(done)
+        outcome.seconds = time.perf_counter() - t0
+        return outcome
+    outcome.out = plan.out
+    try:  # assembles and factorizes (the run's set-up): may fail before any level
+        check_stop()
+        if plan.note:
+            caution(plan.note)
+        _, small = smallness_report(cfg.problem, plan.solver)
+        for w in [small, *overshoot_lines(cfg)]:
+            if w:
+                outcome.warnings.append(w)
+                caution(f"warning: {w}")
+        tell(f"{cfg.title}: " + ", ".join(f"{k} {v}" for k, v in est.rows()))
+        check_stop()
+    except BaseException:
+        abandon_run(plan)
+        raise
+    if cfg.cycles is not None:
+        from .cycles import execute_cycles
+
+        _, outcome.cycles = execute_cycles(plan, progress=progress)
+    else:
+        result = execute_run(plan, progress=progress)
+        if isinstance(result, str):  # the arrays do not fit in memory: result.h5 only
+            outcome.note = result
+        else:
+            outcome.result = result
+        if plan.state is not None:
+            outcome.resumed_from = int(plan.state.completed)
+    outcome.seconds = time.perf_counter() - t0
+    return outcome
+
+
+def overshoot_lines(cfg: Any) -> list[str]:
+    """The warning of the explicit wear rule's overshoot, if any."""
+    from ..simulate.explicit import overshoot_warning
+
+    w = overshoot_warning(cfg.problem)
+    return [w] if w else []
