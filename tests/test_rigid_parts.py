@@ -10,7 +10,7 @@ import pytest
 
 from vemwear import LinearCompliance, Material, Problem, TimeGrid, simulate
 from vemwear.config import ConfigError, parse_config
-from vemwear.mesh import rectangle_squares, tag_rectangle
+from vemwear.mesh import rectangle_squares, select_parts, tag_rectangle
 from vemwear.mesh.generate3d import box_hexahedra, tag_box
 from vemwear.simulate import Prescribed, RigidPart
 
@@ -190,3 +190,52 @@ def test_summary_reports_the_holders_translation(tmp_path: Any) -> None:
         assert np.allclose(z["u"][-1][top], [tx, ty], rtol=0, atol=1e-15)
         assert [str(n) for n in z["force_parts"]] == ["contact", "rollers", "holder"]
     assert ty < 0 and abs(tx) < 1e-15
+
+
+@pytest.mark.parametrize("method", ["newton", "uzawa"])
+@pytest.mark.parametrize("level", [0, 3, 6])
+def test_a_holders_run_resumes_bitwise(method: str, level: int) -> None:
+    """Load control with a holder and a ramped load, two contact parts with their own
+    data and a gap: a run stopped at a level resumes to the same arrays, bitwise."""
+    from vemwear.contact import ContactPart
+
+    mesh = select_parts(
+        rectangle_squares((1.0, 0.5), (12, 6)),
+        {
+            "holder": "top",
+            "free": ["left", "right"],
+            "c1": [((0.0, 0.0), (0.5, 0.0))],
+            "c2": [((0.5, 0.0), (1.0, 0.0))],
+        },
+    )
+    law = LinearCompliance(1.0)
+    pr = Problem(
+        mesh,
+        Material(4.0, 4.0),
+        TimeGrid.uniform(1.0, 8),
+        clamped=(),
+        contacts=(
+            ContactPart("c1", law, 0.1, 0.2, 0.5, (1.0, 0.0), 0.002),
+            ContactPart("c2", LinearCompliance(2.0), 0.1, 0.3, 1.0, (1.0, 0.0), 0.0),
+        ),
+        rigid=(
+            RigidPart(
+                "holder", force=(None, lambda t: -P * min(t / 0.25, 1.0)), translation=(0.0, None)
+            ),
+        ),
+    )
+
+    class Stop(Exception):
+        pass
+
+    def stop(n: int, _sol: Any) -> None:
+        if n == level:
+            raise Stop
+
+    with pytest.raises(Stop) as info:
+        simulate(pr, method, callback=stop)
+    resumed = simulate(pr, method, resume=info.value.partial_result)  # type: ignore[attr-defined]
+    ref = simulate(pr, method)
+    assert ref.residuals.max() <= 1e-10
+    for k in ("wear", "u_nu", "p_rigid", "p_soft", "u", "iterations", "forces"):
+        assert np.array_equal(getattr(resumed, k), getattr(ref, k)), k
