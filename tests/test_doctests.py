@@ -25,6 +25,7 @@ ENTRY_POINTS = (
     "vemwear.contact.LinearCompliance",
     "vemwear.contact.TableCompliance",
     "vemwear.contact.CallableCompliance",
+    "vemwear.runner.run_config",
 )
 
 

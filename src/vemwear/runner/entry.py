@@ -138,6 +138,23 @@ def run_config(
         A refused run (invalid input), before any solving.
     ConvergenceError, WornThroughError, KeyboardInterrupt
         A run that stopped; its finished levels are saved (``exc.vemwear_note``).
+
+    Examples
+    --------
+    A shipped configuration at a small size, run into a fresh directory:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from vemwear import run_config
+    >>> from vemwear.examples import config_path
+    >>> tmp = Path(tempfile.mkdtemp())
+    >>> text = config_path("example_5_2_set1").read_text(encoding="utf-8")
+    >>> text = text.replace("divisions = [32, 16]", "divisions = [8, 4]")
+    >>> text = text.replace("steps = 64", "steps = 4").replace("= true", "= false")
+    >>> _ = (tmp / "small.toml").write_text(text)
+    >>> outcome = run_config(tmp / "small.toml", tmp / "out", progress=False)
+    >>> len(outcome.result.t), sorted(p.name for p in outcome.out.glob("*.npz"))
+    (5, ['result.npz'])
     """
     from ..config import load_config
     from .describe import smallness_report
