@@ -16,12 +16,12 @@ from numpy.typing import NDArray
 from .backends import factorize
 from .newton import NewtonOptions
 from .rigid import (
-    _pressed,
     anchored_factor,
     bordered_jacobian,
     cold_start,
     layer_x,
     liftoff_error,
+    pressed,
     rigid_modes,
     touching_solution,
 )
@@ -58,12 +58,13 @@ class FullNewton:
         s, opt, rig = self.system, self.options, self.rigid
         if rig is not None and rig.negligible(step.F):
             return self._touching(step)
-        warm = guess is not None and guess.u is not None
-        if warm and rig is not None:  # a previous level that touched without force: cold
-            warm = _pressed(s, s.N @ guess.u, guess.p_rigid, step.w)  # type: ignore[union-attr]
-        if warm:
-            u = np.array(guess.u, copy=True)  # type: ignore[union-attr]
-            p_rigid = np.array(guess.p_rigid, copy=True)  # type: ignore[union-attr]
+        # a previous level that touched without force is no warm start under load control
+        if (
+            guess is not None
+            and guess.u is not None
+            and (rig is None or pressed(s, s.N @ guess.u, guess.p_rigid, step.w))
+        ):
+            u, p_rigid = np.array(guess.u, copy=True), np.array(guess.p_rigid, copy=True)
         elif rig is not None:  # the rigid motion to the condensed Newton's cold start
             y0, p_rigid = cold_start(s, step.w)
             u = rig.R @ (rig.pinv_NR @ y0)

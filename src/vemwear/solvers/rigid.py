@@ -285,7 +285,7 @@ def newton_rigid(solver: Any, step: StepData, d: NDArray, start: tuple | None, i
     f_R, negligible = rig.load_of(step.F)
     if negligible:
         return touching(s, rig, step, d)
-    if start is not None and not _pressed(s, start[0], start[1], wear):
+    if start is not None and not pressed(s, start[0], start[1], wear):
         start = None  # the previous level touched without force (a load ramped from 0)
     y, p_rigid = cold_start(s, wear) if start is None else start
     inv_g = solver.inv_g_ref
@@ -337,7 +337,7 @@ def newton_rigid(solver: Any, step: StepData, d: NDArray, start: tuple | None, i
         a = a + sol[m:]
 
 
-def _pressed(system: ContactSystem, y: NDArray, p_rigid: NDArray, wear: NDArray) -> bool:
+def pressed(system: ContactSystem, y: NDArray, p_rigid: NDArray, wear: NDArray) -> bool:
     """Whether some contact node holds the body at (y, p_rigid): on the rigid layer, or
     in the soft layer where it is stiff (else Newton's first matrix is singular)."""
     active = p_rigid + system.c_ncp * (y - system.g) > 0.0
