@@ -99,3 +99,49 @@ def test_sigterm_stops_newton_full_within_two_seconds(tmp_path: Path) -> None:
         assert proc.returncode in (130, -signal.SIGTERM), err
         assert b"Exception ignored" not in err, err
         assert took < 2.0, (delay, took, err)
+
+
+IN_ZIP_CLOSE = textwrap.dedent(
+    """
+    import os, signal, sys, zipfile
+    from vemwear.cli.main import main
+
+    close = zipfile._ZipWriteFile.close
+    sent = []
+
+    def close_with_signal(self):  # the signal lands as a member of result.npz is closed
+        name = os.path.basename(str(self._zipfile.filename))
+        if not sent and not self.closed and name.startswith(".result"):
+            sent.append(1)
+            os.kill(os.getpid(), signal.SIGTERM)
+        return close(self)
+
+    zipfile._ZipWriteFile.close = close_with_signal
+    sys.exit(main(sys.argv[1:]))
+    """
+)
+
+
+def test_sigterm_while_a_zip_member_is_closed_is_a_stop_then_resume(tmp_path: Path) -> None:
+    """A signal raised inside ``zipfile``'s member close makes ``numpy.savez`` fail with
+    a ValueError (the zip closed with a handle open) whose context is the signal: the
+    run is stopped (exit 130, its levels saved), not an internal error, and resumes."""
+    cfg = tmp_path / "small.toml"
+    cfg.write_text(small_config("small", steps=4))
+    out = tmp_path / "out"
+    script = tmp_path / "in_zip_close.py"
+    script.write_text(IN_ZIP_CLOSE)
+    run = [str(cfg), "-o", str(out), "--no-progress"]
+    done = subprocess.run(
+        [sys.executable, str(script), "run", *run], capture_output=True, text=True, env=_env()
+    )
+    assert done.returncode == 130, done.stderr
+    assert "interrupted; every time level is solved and saved" in done.stderr, done.stderr
+    again = subprocess.run(
+        [sys.executable, "-m", "vemwear", "run", *run, "--resume"],
+        capture_output=True,
+        text=True,
+        env=_env(),
+    )
+    assert again.returncode == 0, again.stderr
+    assert (out / "result.npz").is_file()

@@ -137,6 +137,14 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
     return EXIT_INTERNAL, f"internal error: {type(exc).__name__}: {exc}"
 
 
+def _interrupted(exc: BaseException, debug: bool) -> int:
+    """Ctrl-C, SIGTERM or SIGHUP (or an error raised while stopping for one): one line."""
+    if debug:
+        traceback.print_exception(exc)
+    say(f"{PROG}: interrupted{getattr(exc, 'vemwear_note', '')}")
+    return EXIT_INTERRUPTED
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``vemwear`` command line; returns the exit code.
 
@@ -176,11 +184,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             pass
         return EXIT_OK
     except KeyboardInterrupt as exc:
-        if debug:
-            traceback.print_exception(exc)
-        say(f"{PROG}: interrupted{getattr(exc, 'vemwear_note', '')}")
-        return EXIT_INTERRUPTED
+        return _interrupted(exc, debug)
     except Exception as exc:  # every error ends as one line with its exit code
+        from ..runner.signals import stop_signal
+
+        if stop_signal(exc) is not None:  # a library failing as it unwinds from the stop
+            return _interrupted(exc, debug)
         code, msg = _exit_code(exc)
         if debug:
             traceback.print_exception(exc)

@@ -26,7 +26,14 @@ from contextlib import contextmanager
 from types import FrameType
 from typing import Any
 
-__all__ = ["Terminated", "check_stop", "saving", "signals_as_interrupts", "stop_reason"]
+__all__ = [
+    "Terminated",
+    "check_stop",
+    "saving",
+    "signals_as_interrupts",
+    "stop_reason",
+    "stop_signal",
+]
 
 _NAMES = {"SIGTERM": "terminated (SIGTERM)", "SIGHUP": "hung up (SIGHUP)"}
 
@@ -47,11 +54,27 @@ class _State:
     deferred: BaseException | None = None  # a signal that landed in a finalizer, to raise
 
 
+def stop_signal(exc: BaseException) -> KeyboardInterrupt | None:
+    """The stop signal behind ``exc``: ``exc`` itself, or the one it was raised while
+    handling (a library that fails as it unwinds from the signal, such as a zip file
+    closed while its member's handle is still open), else None."""
+    seen: set[int] = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return e
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return None
+
+
 def stop_reason(exc: BaseException) -> str | None:
-    """``"interrupted (Ctrl-C)"``, ``"terminated (SIGTERM)"``, ... for a stop by a signal."""
-    if isinstance(exc, Terminated):
-        return _NAMES.get(exc.signame, f"stopped ({exc.signame})")
-    if isinstance(exc, KeyboardInterrupt):
+    """``"interrupted (Ctrl-C)"``, ``"terminated (SIGTERM)"``, ... for a stop by a signal
+    (:func:`stop_signal`), else None."""
+    sig = stop_signal(exc)
+    if isinstance(sig, Terminated):
+        return _NAMES.get(sig.signame, f"stopped ({sig.signame})")
+    if sig is not None:
         return "interrupted (Ctrl-C)"
     return None
 
