@@ -347,11 +347,7 @@ class CondensedNewton:
     def predicts(self) -> bool:
         """Whether :meth:`predict` pays: a piecewise-linear law and at most 362 contact
         nodes (:data:`.pieces.MIN_WIDTH`)."""
-        return (
-            self.rigid is None
-            and self.system.p.piecewise_linear
-            and block_width(self.system.m) >= MIN_WIDTH
-        )
+        return self.system.p.piecewise_linear and block_width(self.system.m) >= MIN_WIDTH
 
     #: Recovers many levels in one block solve (:class:`.protocol.BatchStepSolver`).
     batch = True

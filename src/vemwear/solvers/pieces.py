@@ -39,14 +39,17 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import scipy.linalg as sla
 from numpy.typing import NDArray
 
-from .system import RESIDUAL_NAMES, StepData, StepSolution
+from .system import _TINY, RESIDUAL_NAMES, StepData, StepSolution
 
 if TYPE_CHECKING:
     from .newton import CondensedNewton
 
 __all__ = ["FIRST_RUN", "MIN_WIDTH", "Piece", "PiecePredictor", "block_width"]
+
+_NO_AMPLITUDES = np.zeros(0)
 
 #: Levels of a first run, and of a run after one cut short by a change of piece.
 FIRST_RUN = 8
@@ -67,22 +70,53 @@ def block_width(m: int) -> int:
 
 class Piece:
     """The affine map of one piece, wear -> (y, p_rigid): the LU factors of J (Newton's
-    reduced matrix of the piece), ``M`` and ``c0``."""
+    reduced matrix of the piece), ``M`` and ``c0``.
 
-    def __init__(self, newton: CondensedNewton, d, active, slope, offset, fric) -> None:
+    Under load control (:mod:`.rigid`) the unknowns gain the amplitudes ``a`` of the
+    rigid motions and the map is ``B [z; a] = [M w + c0; L w + e0]``, with B the
+    bordered reduced matrix (:meth:`.rigid.RigidModes.bordered`) and the force rows
+    ``L = s_R (LN + LT) D``, ``e0 = s_R (R^T F - (LN + LT) (q + D g_A))``: the force
+    balance along R on the piece. ``usable`` is False where B is singular.
+    """
+
+    def __init__(self, newton: CondensedNewton, d, active, slope, offset, fric, F) -> None:
         self.key = (active.tobytes(), slope.tobytes(), offset.tobytes(), fric.tobytes())
         self.d = d
         self.active, self.slope, self.offset = active, slope, offset
         self.any_active = bool(active.any())
-        self.red = newton.reduced_matrix(active, slope, fric)
         AT = newton.friction_matrix(fric)  # C_NN W + C_NT W Fric
         self.M = AT * slope[None, :]
         c0 = d - AT @ offset
+        g_A = np.where(active, newton.system.g, 0.0)
         if self.any_active:
-            g_A = np.where(active, newton.system.g, 0.0)
             c0 -= self.M @ g_A
             c0 -= g_A
         self.c0 = c0
+        rig = newton.rigid
+        self.usable = True
+        self.red: Any = None
+        self.bordered: Any = None
+        if rig is None:
+            self.red = newton.reduced_matrix(active, slope, fric)
+            return
+        self.bordered, sR = rig.bordered(newton, active, slope, fric)
+        self.usable = self.bordered is not None
+        self.f_R = rig.load_of(F)[0]
+        LN, LT = rig.force_rows(newton.system, fric)
+        L = (LN + LT) * sR
+        self.L = L * slope[None, :]
+        self.e0 = sR * self.f_R - L @ offset - self.L @ g_A
+
+    def solve(self, w: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``z`` (y off the active set, p_rigid on it) and the amplitudes ``a`` (none
+        without load control) of the piece's solution at wear ``w``."""
+        b = self.M @ w
+        b += self.c0
+        if self.red is not None:
+            return self.red.solve(b), _NO_AMPLITUDES
+        za = sla.lu_solve(self.bordered, np.concatenate([b, self.L @ w + self.e0]))
+        m = len(b)
+        return za[:m], za[m:]
 
     def matches(self, active, slope, offset, fric, d) -> bool:
         # a constant load keeps its array d
@@ -158,21 +192,22 @@ class PiecePredictor:
         slope, offset = law.segments(y0 - w)
         piece = self.piece
         if piece is None or not piece.matches(active, slope, offset, fric, d):
-            piece = self.piece = Piece(newton, d, active, slope, offset, fric)
-        M, c0, red = piece.M, piece.c0, piece.red
+            piece = self.piece = Piece(newton, d, active, slope, offset, fric, step.F)
+        rig = newton.rigid
+        if rig is not None and (not piece.usable or rig.load_of(step.F)[1]):
+            return []  # nothing holds the body on this piece, or no load: Newton says
         Y, P, S, Wr = (np.empty((count, m)) for _ in range(4))
+        A = np.empty((count, 0 if rig is None else rig.R.shape[1]))
         for j in range(count):
             if j:
                 w_next = advance(S[j - 1])
                 if w_next is None:  # the step data change beyond the wear
-                    Y, P, S, Wr = Y[:j], P[:j], S[:j], Wr[:j]
+                    Y, P, S, Wr, A = Y[:j], P[:j], S[:j], Wr[:j], A[:j]
                     count = j
                     break
                 w = w_next
             Wr[j] = w
-            b = M @ w
-            b += c0
-            z = red.solve(b)
+            z, A[j] = piece.solve(w)
             if piece.any_active:
                 Y[j] = np.where(active, g, z)
                 P[j] = np.where(active, z, 0.0)
@@ -182,7 +217,7 @@ class PiecePredictor:
             S[j] = law(Y[j] - w)
         P_plus = np.maximum(P, 0.0)  # Newton's solution clamps p_rigid after its test
         ok = self._same_piece(Y, P_plus, Wr, piece)
-        errors = self._errors(d, fric, Y, P, S, first)
+        errors = self._errors(d, fric, Y, P, S, first, A, piece)
         ok &= np.all(errors <= 0.1 * newton.options.tol, axis=1)
         k = count if ok.all() else int(np.argmin(ok))
         self._run = min(2 * count, self.width) if k == count else FIRST_RUN
@@ -218,12 +253,14 @@ class PiecePredictor:
             )
         return ok
 
-    def _errors(self, d, fric, Y, P, S, first: int) -> NDArray[np.float64]:
+    def _errors(self, d, fric, Y, P, S, first: int, A, piece: Piece) -> NDArray[np.float64]:
         """The three condensed residuals of Newton's exit test, (k, 3), of the rows of
         Y, P (p_rigid before clamping) and S (p_soft), by the formulas of Newton's
         (equilibrium max |R| / g_ref; feasibility and complementarity of p_rigid and
         g - y): the products with H in a block of :attr:`width` columns, row j in
-        column ``first + j``."""
+        column ``first + j``. Under load control, with the amplitudes A (k, r): the
+        condensed equation's ``- (N R) a`` and the force balance along R
+        (:meth:`.rigid.RigidModes.balance`) in the equilibrium residual."""
         newton = self.newton
         s = newton.system
         k, m = Y.shape
@@ -236,7 +273,16 @@ class PiecePredictor:
         R += Y
         R -= d
         inv_g = newton.inv_g_ref
+        rig = newton.rigid
+        if rig is not None:
+            for j in range(A.shape[1]):  # elementwise: a row's numbers are its own
+                R -= A[:, j : j + 1] * rig.NR[:, j]
         equilibrium = np.abs(R).max(axis=1) * inv_g
+        if rig is not None:
+            R2 = (rig.H_R @ X)[:, cols].T - piece.f_R
+            scale = np.maximum((rig.abs_H_R @ np.abs(X))[:, cols].T, np.abs(piece.f_R))
+            eq2 = (np.abs(R2) / np.maximum(scale, _TINY)).max(axis=1, initial=0.0)
+            equilibrium = np.maximum(equilibrium, eq2)
         g_minus_y = s.g - Y
         gap = g_minus_y * inv_g
         p_ref = np.abs(P).max(axis=1)

@@ -57,12 +57,14 @@ def choose_anchors(R: NDArray[np.float64], exclude: NDArray[np.int64]) -> NDArra
 
 
 class AnchoredFactor:
-    """``G b``: K's inverse with the anchor dofs fixed at zero, from a factorization of K
-    on the other dofs ``keep`` (a Schur factorization, whose block on the contact dofs it
-    keeps as ``S_inv``, or a plain one)."""
+    """``G b``: K's inverse with the anchor dofs fixed at zero, from a factorization of
+    ``K_a``, K with the anchors' rows and columns replaced by those of the identity
+    (:func:`anchored_matrix`; a Schur factorization, whose block on the contact dofs it
+    keeps as ``S_inv``, or a plain one). ``K_a`` is SPD and solves on the whole dof
+    vector: no gather or scatter of the other dofs."""
 
-    def __init__(self, inner: Any, keep: NDArray[np.int64], n: int) -> None:
-        self.inner, self.keep, self.n = inner, keep, n
+    def __init__(self, inner: Any, anchors: NDArray[np.int64], n: int, schur: bool) -> None:
+        self.inner, self.anchors, self.n, self.schur = inner, anchors, n, schur
         self.name: str = getattr(inner, "name", "")
         self.timings: dict[str, float] = getattr(inner, "timings", {})
         self.S_inv: NDArray[np.float64] = getattr(inner, "S_inv", np.zeros((0, 0)))
@@ -70,11 +72,24 @@ class AnchoredFactor:
     def solve(self, b: NDArray[np.float64], out: NDArray[np.float64] | None = None) -> NDArray:
         """``G b`` for a vector or an (n, k) block (written to ``out`` when given)."""
         b = np.asarray(b, dtype=float)
-        x = np.zeros(b.shape) if out is None else out
-        if out is not None:
-            x[...] = 0.0
-        x[self.keep] = self.inner.solve(np.asfortranarray(b[self.keep]))
+        if np.any(b[self.anchors]):  # G ignores the load on the anchors
+            b = b.copy(order="F")
+            b[self.anchors] = 0.0
+        if out is None or self.schur:  # a Schur factorization writes to ``out`` itself
+            x = self.inner.solve(b) if out is None else self.inner.solve(b, out=out)
+        else:
+            x = out
+            x[...] = self.inner.solve(b)
+        x[self.anchors] = 0.0  # exactly, whatever a refinement step of the solver left
         return x
+
+
+def anchored_matrix(K: sp.spmatrix, anchors: NDArray[np.int64]) -> sp.csr_matrix:
+    """K with the rows and columns of the anchor dofs replaced by the identity's."""
+    keep = np.ones(K.shape[0])
+    keep[anchors] = 0.0
+    D = sp.diags(keep)
+    return (D @ K @ D + sp.diags(1.0 - keep)).tocsr()
 
 
 @dataclass
@@ -132,7 +147,6 @@ class RigidModes:
             return self._bordered[1], self._bordered[2]
         s = solver.system
         m, r = len(active), self.R.shape[1]
-        w = s.weights
         total = s.friction_total
         on_total = active & total if total is not None else np.zeros(m, dtype=bool)
         inactive = np.flatnonzero(~active)
@@ -144,9 +158,7 @@ class RigidModes:
         Mat[:, on_total] = A_fric[:, on_total]
         Mat[inactive, inactive] += 1.0
         B[:m, m:] = -self.NR
-        # the friction rows' weights summed per node: (r, m)
-        LT = (self.TR * (s.tile_rows(w) * fric)[:, None]).T.reshape(r, s.rows, m).sum(axis=1)
-        LN = self.NR.T * w
+        LN, LT = self.force_rows(s, fric)
         L = (LN + LT) * dp
         L[:, active] = LN[:, active]
         L[:, on_total] += LT[:, on_total]
@@ -158,6 +170,15 @@ class RigidModes:
             lu = None  # singular: no node holds a rigid motion
         self._bordered = (key, lu, sR)
         return lu, sR
+
+    def force_rows(self, system: ContactSystem, fric: NDArray) -> tuple[NDArray, NDArray]:
+        """``(N R)^T W`` and ``(Tau R)^T W Fric`` with each node's friction rows summed,
+        (r, m) each: the force balance along R is ``LN (p_soft + p_rigid) + LT q`` (q the
+        pressure friction acts on) ``= R^T F``."""
+        m, r = system.m, self.R.shape[1]
+        w = system.weights
+        LT = (self.TR * (system.tile_rows(w) * fric)[:, None]).T.reshape(r, system.rows, m)
+        return self.NR.T * w, LT.sum(axis=1)
 
     def negligible(self, F: NDArray[np.float64]) -> bool:
         """Whether the load has no component along the rigid motions: each within
@@ -206,23 +227,20 @@ def rigid_modes(system: ContactSystem, exclude: NDArray[np.int64]) -> RigidModes
 def anchored_schur(
     system: ContactSystem, rigid: RigidModes, last: NDArray[np.int64], backend: str
 ) -> AnchoredFactor:
-    """The Schur factorization of K without the anchors, its Schur block on the free
-    dofs ``last`` (in that order)."""
-    keep = rigid.keep
-    pos = -np.ones(system.n_free, dtype=np.int64)
-    pos[keep] = np.arange(len(keep))
-    Kk = system.K[keep][:, keep].tocsr()
-    inner = schur_factorize(Kk, pos[last], system.dof_points[keep], backend)
-    if np.any(pos[last] < 0):
+    """The Schur factorization of the anchored K (:func:`anchored_matrix`), its Schur
+    block on the free dofs ``last`` (in that order)."""
+    if np.any(np.isin(last, rigid.anchors)):
         raise ValueError("anchors: a contact dof was chosen as an anchor")
-    return AnchoredFactor(inner, keep, system.n_free)
+    Ka = anchored_matrix(system.K, rigid.anchors)
+    inner = schur_factorize(Ka, last, system.dof_points, backend)
+    return AnchoredFactor(inner, rigid.anchors, system.n_free, schur=True)
 
 
 def anchored_factor(system: ContactSystem, rigid: RigidModes, backend: str) -> AnchoredFactor:
-    """A plain factorization of K without the anchors (``G`` for any right-hand side)."""
-    keep = rigid.keep
-    inner = factorize(system.K[keep][:, keep].tocsc(), backend)
-    return AnchoredFactor(inner, keep, system.n_free)
+    """A plain factorization of the anchored K (``G`` for any right-hand side)."""
+    Ka = anchored_matrix(system.K, rigid.anchors)
+    inner = factorize(Ka.tocsc(), backend)
+    return AnchoredFactor(inner, rigid.anchors, system.n_free, schur=False)
 
 
 def liftoff_error(
