@@ -204,3 +204,55 @@ def test_many_contact_nodes_are_left_to_newton(monkeypatch) -> None:
     solved = newton_levels(monkeypatch)
     simulate(pr)
     assert solved == list(range(9))
+
+
+def held_by_contact(law, *, T: float = 1.0, steps: int = 64) -> Problem:
+    """A pad on rollers pressed by a traction on its top: contact alone holds it in y
+    (load control, docs/method.md section 1c)."""
+    from vemwear.simulate import Prescribed
+
+    mesh = tag_rectangle(
+        rectangle_squares((2.0, 1.0), (16, 8)),
+        {"rollers": ["left", "right"], "traction": "top", "contact": "bottom"},
+    )
+    return Problem(
+        mesh,
+        Material(4.0, 4.0),
+        TimeGrid.uniform(T, steps),
+        f2=(0.0, -0.06),
+        p=law,
+        g=0.1,
+        mu=0.2,
+        kappa=2.0,
+        v_star=(1.0, 0.0),
+        clamped=(),
+        displacement=(Prescribed("rollers", ux=0.0),),
+    )
+
+
+@pytest.mark.parametrize(
+    ("law", "kw"),
+    [(LinearCompliance(0.4), {}), (LinearCompliance(0.4), {"T": 10.0, "steps": 200}), (TABLE, {})],
+    ids=["paper", "rigid-layer", "table"],
+)
+def test_load_controlled_runs_are_newtons_levels(monkeypatch, law, kw) -> None:
+    """Under load control the runs solve the bordered piece (with the rigid motion's
+    amplitude and the force balance): the same levels as Newton's, few Newton solves,
+    and the contact forces balance the load at every level."""
+    pr = held_by_contact(law, **kw)
+    ref = simulate(dataclasses.replace(pr, p=as_callable(law)))
+    solved = newton_levels(monkeypatch)
+    got = simulate(pr)
+    L = len(pr.time.t)
+    assert 1 <= len(solved) <= L // 8, solved
+    np.testing.assert_array_equal(got.iterations, ref.iterations)
+    for k in FIELDS:
+        a, b = getattr(got, k), getattr(ref, k)
+        scale = max(float(np.abs(b).max()), 1e-300)
+        assert np.abs(a - b).max() <= 1e-11 * scale, k
+    assert got.residuals.max() <= 1e-10
+    load = 0.06 * 2.0  # the traction on the top side, of length 2
+    resultant = got.forces[:, :, 1].sum(axis=1)  # in y, of the contact and the rollers
+    assert np.abs(resultant - load).max() <= 1e-12 * load, resultant
+    if kw.get("T"):
+        assert got.p_rigid.max() > 0.0
