@@ -108,10 +108,21 @@ def _time(v: Any) -> Any:
 
 def _rigid_part(src: str, name: str, path: str, rp: s.RigidPartTable) -> RigidPart:
     """The library's :class:`RigidPart` of a ``[[boundary.rigid]]`` table."""
-    if rp.rotation == "free":
+    if rp.moment is not None and rp.rotation == "fixed":
         raise ConfigError(
-            f"{src}: {path}: rotation = 'free' is not available: a rigid part translates "
-            "only (rotation = 'fixed')"
+            f"{src}: {path}: moment is for rotation = 'free' (a part whose rotation is fixed "
+            "takes the moment as a reaction)"
+        )
+    if isinstance(rp.rotation, list) and len(rp.rotation) != 3:
+        raise ConfigError(
+            f"{src}: {path}: rotation is 'fixed', 'free' or one of them per axis in 3D "
+            f"(3 components, not {len(rp.rotation)})"
+        )
+    moment = rp.moment if isinstance(rp.moment, list) else [rp.moment]
+    if isinstance(rp.moment, list) and len(rp.moment) != 3:
+        raise ConfigError(
+            f"{src}: {path}: moment is one number in 2D (M_z) or [M_x, M_y, M_z] in 3D, "
+            f"not {len(rp.moment)} components"
         )
     keys = (rp.fx, rp.fy, rp.fz)
     if rp.force is not None and any(k is not None for k in keys):
@@ -125,7 +136,13 @@ def _rigid_part(src: str, name: str, path: str, rp: s.RigidPartTable) -> RigidPa
                 f"{src}: {path}: component {'xyz'[c]} has both a force and a prescribed "
                 f"translation u{'xyz'[c]}; give one"
             )
-    return RigidPart(name, tuple(_time(f) for f in force), tuple(_time(u) for u in trans))
+    return RigidPart(
+        name,
+        tuple(_time(f) for f in force),
+        tuple(_time(u) for u in trans),
+        rotation=rp.rotation if isinstance(rp.rotation, str) else tuple(rp.rotation),
+        moment=tuple(_time(m) for m in moment) if rp.moment is not None else (),
+    )
 
 
 def roles(src: str, c: s.ConfigFile, raw: Mapping[str, Any]) -> Roles:

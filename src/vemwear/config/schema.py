@@ -440,7 +440,8 @@ TimeComponent: TypeAlias = by_kind(  # type: ignore[valid-type]
 class RigidPartTable(Section):
     """A part that moves as one rigid body (the holder of a pin or ball): each component
     of its translation is prescribed (ux, uy, uz) or loaded by a force resultant (force,
-    or fx, fy, fz; zero when omitted)."""
+    or fx, fy, fz; zero when omitted); its rotation is fixed, or free and loaded by a
+    moment."""
 
     name: str | None = Field(None, description="name of the part (default: rigid1, rigid2, ...)")
     on: Selector = Field(title="selector", description="where")
@@ -457,8 +458,16 @@ class RigidPartTable(Section):
     ux: TimeComponent | None = Field(None, description="prescribed x translation of the part")
     uy: TimeComponent | None = Field(None, description="prescribed y translation of the part")
     uz: TimeComponent | None = Field(None, description="prescribed z translation (3D)")
-    rotation: Literal["fixed", "free"] = Field(
-        "fixed", description="'fixed': the part translates only"
+    rotation: Literal["fixed", "free"] | list[Literal["fixed", "free"]] = Field(
+        "fixed",
+        description="'fixed': the part translates only; 'free': it also turns about the mean "
+        "of its vertices; 3D: also one per axis, ['free', 'free', 'fixed'] (tilts, no turn "
+        "about z)",
+    )
+    moment: TimeComponent | list[TimeComponent] | None = Field(  # type: ignore[valid-type]
+        None,
+        description="moment resultant about the mean of the part's vertices, with rotation = "
+        "'free': M_z in 2D, [M_x, M_y, M_z] in 3D (numbers or expressions in t; 0 when omitted)",
     )
 
 

@@ -349,14 +349,18 @@ def summarize(result: Result) -> dict[str, Any]:
 
         outputs["forces_final"] = force_table(result)
     ties = result.problem.constraints.ties
-    if ties is not None and len(result.u):  # each rigid part's translation at T
-        d = result.problem.dim
-        u_T = np.asarray(result.u[-1])
+    if ties is not None and len(result.u):  # each rigid part's motion at T
+        trans, rot = ties.motions(np.asarray(result.u[-1]))
         outputs["rigid_parts"] = {
             pc.part: {
-                "translation_final": [float(u_T[int(dof) // d, c]) for c, dof in enumerate(row)]
+                "translation_final": trans[i].tolist(),
+                **(
+                    {"centre": ties.centres[i].tolist(), "rotation_final": rot[i].tolist()}
+                    if pc.turns
+                    else {}
+                ),
             }
-            for pc, row in zip(ties.parts, ties.masters, strict=True)
+            for i, pc in enumerate(ties.parts)
         }
     return {"statistics": stats, "outputs": outputs}
 

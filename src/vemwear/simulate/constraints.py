@@ -140,7 +140,17 @@ class Constraints:
                     dd = dd[~tied[dd]]
                     owner[dd[owner[dd] < 0]] = self.n_clamped + i
         #: the ties of the rigid parts (None without rigid parts)
-        self.ties = Ties(tuple(rigid), [list(c[:d]) for c in rigid_dofs], n) if rigid else None
+        self.ties = (
+            Ties(
+                tuple(rigid),
+                [list(c[:d]) for c in rigid_dofs],
+                n,
+                sp_.dof_points,
+                d * mesh.n_points,
+            )
+            if rigid
+            else None
+        )
         self.rigid = tuple(rigid)
         if self.ties is not None:
             first = self.n_clamped + len(prescribed)
@@ -149,6 +159,8 @@ class Constraints:
                     if r.component(c)[1] is not None:
                         owner[self.ties.masters[j, c]] = first + j
             tied[self.ties.masters.ravel()] = False  # masters are dofs; slaves are not
+            rot = self.ties.rotation_dofs
+            tied[rot[rot >= 0]] = False  # nor are the dofs that hold a part's rotation
         #: dofs tied to a rigid part's master (neither free nor constrained)
         self.slaves = np.flatnonzero(tied)
         self.mesh = mesh
@@ -175,6 +187,8 @@ class Constraints:
         fixed = self.mask | self._tied
         if self.ties is not None:  # the masters move with their rigid part
             fixed[self.ties.masters.ravel()] = True
+            rot = self.ties.rotation_dofs
+            fixed[rot[rot >= 0]] = True
         return np.asarray(fixed[: d * self.mesh.n_points].reshape(-1, d).all(axis=1))
 
     def values(self, t: float) -> NDArray[np.float64]:
@@ -238,14 +252,24 @@ class Constraints:
         if len(self.dofs) == 0 and len(self.slaves) == 0:
             return np.eye(n_rigid)
         pts, d = self.space.dof_points, self.dim
-        A = self.rigid_motion_matrix(pts[self.dofs], self.dofs % d)
+        A = self._motion_rows(self.dofs)
         if self.ties is not None:  # a tie u_s = u_master holds what moves s and its master apart
-            s, m = self.slaves, self.ties.master[self.slaves]
+            s = self.slaves[~self._turning_slaves]
+            m = self.ties.master[s]
+            # a part that turns about some axes holds the global rotations about the others
+            rot = self.ties.rotation_dofs
+            held = [
+                np.eye(n_rigid)[n_rigid - rot.shape[1] + k]
+                for i, pc in enumerate(self.ties.parts)
+                if pc.turns
+                for k in np.flatnonzero(rot[i] < 0)
+            ]
             A = np.vstack(
                 [
                     A,
                     self.rigid_motion_matrix(pts[s], s % d)
                     - self.rigid_motion_matrix(pts[m], m % d),
+                    *held,
                 ]
             )
         _, sv, Vt = np.linalg.svd(A, full_matrices=True)
@@ -253,9 +277,41 @@ class Constraints:
         return np.asarray(Vt[rank:])
 
     def rigid_modes(self, basis: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The rigid motions ``basis`` (r, 3 or 6) as dof vectors, (n_dofs, r)."""
-        dofs = np.arange(self.space.n_dofs)
-        return self.rigid_motion_matrix(self.space.dof_points, dofs % self.dim) @ basis.T
+        """The rigid motions ``basis`` (r, 3 or 6) as dof vectors, (n_dofs, r), in the
+        unknowns of the tied system (a part that turns: its translation of its centre
+        on its masters, its rotation on its rotation dofs)."""
+        return self._motion_rows(np.arange(self.space.n_dofs)) @ basis.T
+
+    @property
+    def _turning_slaves(self) -> NDArray[np.bool_]:
+        """Which of :attr:`slaves` belong to a rigid part that turns."""
+        ties = self.ties
+        if ties is None or not ties.turning:
+            return np.zeros(len(self.slaves), dtype=bool)
+        part_masters = [ties.masters[i] for i, pc in enumerate(ties.parts) if pc.turns]
+        return np.isin(ties.master[self.slaves], np.concatenate(part_masters))
+
+    def _motion_rows(self, dofs: NDArray[np.int64]) -> NDArray[np.float64]:
+        """:meth:`rigid_motion_matrix` at ``dofs`` in the tied system's unknowns: a
+        turning part's masters hold the motion at its centre, its rotation dofs the
+        rotation (coordinates 2 in 2D, 3 + k in 3D, over the length scale)."""
+        pts, d, ties = self.space.dof_points, self.dim, self.ties
+        if ties is None or not ties.turning:
+            return self.rigid_motion_matrix(pts[dofs], dofs % d)
+        pts = pts.copy()
+        for i, pc in enumerate(ties.parts):
+            if pc.turns:
+                pts[ties.masters[i]] = ties.centres[i]
+        A = self.rigid_motion_matrix(pts[dofs], dofs % d)
+        L = float(np.ptp(self.mesh.points, axis=0).max()) or 1.0
+        first = 2 if d == 2 else 3
+        for k, col in enumerate(ties.rotation_dofs.T):
+            hit = np.isin(dofs, col[col >= 0])
+            if not np.any(hit):
+                continue
+            A[hit] = 0.0
+            A[hit, first + k] = 1.0 / L
+        return A
 
     def free_rigid_motions(self) -> list[str]:
         """The rigid motions the constraints leave free, described in words (empty if

@@ -542,7 +542,7 @@ class Discretization:
             for j, t in enumerate(times):
                 U[j, con.dofs] = con.values(cast(float, t))
         if con.ties is not None:  # u = Q u_hat: the tied dofs move with their masters
-            U[:, con.slaves] = U[:, con.ties.master[con.slaves]]
+            con.ties.expand(U)
         return U
 
     def full_displacement(
