@@ -254,6 +254,7 @@ PINNED: dict[str, tuple[str, float, float]] = {
     "plot_fit.py": ("kappa", 4.96341836, 1e-4),  # least squares to its tolerance
     "plot_pin_on_disc.py": ("max_wear", 0.0942821890599, 1e-6),
     "plot_hertz.py": ("a_error", -0.00374499417180, 1e-4),
+    "plot_ball_on_flat.py": ("scar_width", 0.887092314349, 1e-6),
 }
 
 
@@ -288,6 +289,15 @@ def test_gallery_script_runs_and_gives_its_number(name: str) -> None:
         w = found["max_wear"]
         assert w["set2"] > 1.5 * w["set1"] and abs(w["set3"] - w["set2"]) < 1e-3 * w["set2"]
         found["max_wear_set2"] = w["set2"]
+    if name == "plot_pin_on_disc.py":  # Archard's line until the coating wears through
+        V, A, rigid = found["volume"], found["archard"], found["on_rigid"]
+        before = rigid == 0.0
+        assert np.abs(V[before] - A[before]).max() <= 0.01 * A[before].max()
+        assert rigid[-1] > 0.0 and V[-1] < A[-1]
+    if name == "plot_ball_on_flat.py":  # the scar starts at the contact and widens
+        w = found["width"]
+        assert abs(w[2] - found["winkler"]) <= 0.05 * found["winkler"]
+        assert np.all(np.diff(w) >= 0.0) and w[-1] > 1.2 * w[2]
     if name == "plot_fit.py":  # the true kappa is inside the 95 % interval
         assert found["lo"] < 5.0 < found["hi"] and found["result"].success
     got = float(found[key])
