@@ -449,6 +449,10 @@ def test_a_turning_holder_from_a_config_reports_its_rotation(tmp_path: Path) -> 
     rigid = np.array([tx, ty]) + theta * np.column_stack([-X[:, 1], X[:, 0]])
     assert np.abs(u[top] - rigid).max() <= 1e-12 * np.abs(u).max()
     assert theta > 0 and abs(tx) <= 1e-15  # a counter-clockwise moment turns it so
+    # every kept level (t > 0: the moment 0.004 t turns the holder counter-clockwise)
+    assert holder["t"][-1] == 1.0 and len(holder["t"]) >= 3
+    assert holder["rotation"][-1] == [theta] and holder["translation"][-1] == [tx, ty]
+    assert len(holder["rotation"]) == len(holder["t"]) and min(holder["rotation"])[0] > 0
     bad = cfg.read_text().replace('rotation = "free"', 'rotation = ["free", "free", "fixed"]')
     cfg.write_text(bad)
     assert main(["check", str(cfg)]) == 2

@@ -349,16 +349,22 @@ def summarize(result: Result) -> dict[str, Any]:
 
         outputs["forces_final"] = force_table(result)
     ties = result.problem.constraints.ties
-    if ties is not None and len(result.u):  # each rigid part's motion at T
-        trans, rot = ties.motions(np.asarray(result.u[-1]))
+    if ties is not None and len(result.u):  # each rigid part's motion at the kept levels
+        motions = [ties.motions(np.asarray(u)) for u in result.u]
         outputs["rigid_parts"] = {
             pc.part: {
-                "translation_final": trans[i].tolist(),
+                "translation_final": motions[-1][0][i].tolist(),
                 **(
-                    {"centre": ties.centres[i].tolist(), "rotation_final": rot[i].tolist()}
+                    {
+                        "centre": ties.centres[i].tolist(),
+                        "rotation_final": motions[-1][1][i].tolist(),
+                    }
                     if pc.turns
                     else {}
                 ),
+                "t": [float(result.t[n]) for n in result.u_levels],
+                "translation": [m[0][i].tolist() for m in motions],
+                **({"rotation": [m[1][i].tolist() for m in motions]} if pc.turns else {}),
             }
             for i, pc in enumerate(ties.parts)
         }
