@@ -5,6 +5,7 @@ Run in-process through :func:`vemwear.cli.main.main`, as ``vemwear ...`` would.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -230,3 +231,46 @@ def test_output_times_of_many_levels_take_no_levels_sized_temporaries() -> None:
         tracemalloc.stop()
     assert idx.tolist() == [5_000_000, 10_000_000, 15_000_000, 20_000_000]
     assert peak < 1e6, peak
+
+
+def test_many_levels_on_a_fine_contact_are_refused_before_the_time_grid(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """steps = 2e7 on 64 x 32 squares (63 contact nodes) passed the rough check of 2
+    contact nodes, then built the 2e7-level time grid and its velocities (1.5 GB, 4 s)
+    before the real-mesh estimate refused it. The check with the built mesh refuses it
+    before any array of L levels exists: no allocation near the grid's 160 MB."""
+    import tracemalloc
+
+    from vemwear.config import load_config
+    from vemwear.runner.plan import PlanError, admit_sizes
+    from vemwear.util.system import available_memory
+
+    if available_memory() > 140e9:
+        pytest.skip("this machine could hold the run")
+    cfg = tmp_path / "long.toml"
+    cfg.write_text(small_config("long", divisions=(64, 32), steps=20_000_000, output=OFF))
+    expected = r"the run needs about 14\d\.\d\d GB of memory, [\d.]+ [GM]B are available"
+    for command in ("check", "run"):
+        extra = ["-o", str(tmp_path / "out")] if command == "run" else []
+        assert main([command, str(cfg), *extra]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and re.match(
+            f"vemwear: error: {re.escape(str(cfg))}: {expected}", err
+        ), err
+        assert "--force-size to run anyway" in err
+    assert not (tmp_path / "out").exists()
+    seen: list[object] = []
+    admit = admit_sizes()
+    tracemalloc.start()
+    try:
+        with pytest.raises(PlanError, match=expected):
+            load_config(cfg, admit=lambda s: (seen.append(s), admit(s)))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 20e6, peak
+    assert [(s.levels, s.contact, s.points) for s in seen] == [  # type: ignore[attr-defined]
+        (20_000_001, 0, 0),
+        (20_000_001, 63, 65 * 33),
+    ]

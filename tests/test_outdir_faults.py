@@ -115,7 +115,7 @@ def test_a_set_up_killed_before_its_first_checkpoint_is_recognised(
     _killed_setup(out, marker)
     assert _run(cfg, out, *how) == 0, capsys.readouterr().err
     with np.load(ref / "result.npz") as a, np.load(out / "result.npz") as b:
-        for k in ("u", "wear", "p", "lam"):
+        for k in ("u", "wear", "p_soft", "p_rigid"):
             assert np.array_equal(a[k], b[k]), k
     if how == ["--resume"]:
         assert "saved no level; starting from level 0" in capsys.readouterr().err

@@ -98,17 +98,18 @@ def test_save_and_load_arrays(run: Result, tmp_path: Path) -> None:
         "wear": (L, m),
         "u_nu": (L, m),
         "penetration": (L, m),
-        "lam": (L, m),
-        "p": (L, m),
+        "p_rigid": (L, m),
+        "p_soft": (L, m),
         "iterations": (L,),
         "residuals": (L, 3),
         "cells_offsets": (run.problem.mesh.n_cells + 1,),
     }
     for key, shape in shapes.items():
         assert data[key].shape == shape, key
-    attr = {"lam": "p_rigid", "p": "p_soft"}  # result.npz keeps its documented names
-    for key in ("t", "u", "wear", "u_nu", "lam", "p", "iterations", "residuals", "contact_nodes"):
-        np.testing.assert_array_equal(data[key], getattr(run, attr.get(key, key)))
+    for key in ("t", "u", "wear", "u_nu", "p_rigid", "p_soft", "iterations", "residuals"):
+        np.testing.assert_array_equal(data[key], getattr(run, key))  # one name in both
+    np.testing.assert_array_equal(data["contact_nodes"], run.contact_nodes)
+    assert data["format"].item() == "vemwear-result/2"
     np.testing.assert_array_equal(data["penetration"], data["u_nu"] - data["wear"])
     np.testing.assert_array_equal(data["cells_vertices"], run.problem.mesh.cell_vertices)
     assert data["residual_names"].tolist() == list(Result.RESIDUAL_NAMES)
@@ -258,9 +259,9 @@ def test_vtk_series(run: Result, tmp_path: Path) -> None:
         assert disp.shape == (mesh.n_points, 3)
         np.testing.assert_allclose(disp[:, :2], run.u[lv])
         assert np.all(disp[:, 2] == 0)
-        for key, attr in (("wear", "wear"), ("u_nu", "u_nu"), ("lam", "p_rigid"), ("p", "p_soft")):
+        for key in ("wear", "u_nu", "p_rigid", "p_soft"):  # the names of the API
             field = m.point_data[key]
-            np.testing.assert_allclose(field[nodes], getattr(run, attr)[lv])
+            np.testing.assert_allclose(field[nodes], getattr(run, key)[lv])
             off = np.ones(mesh.n_points, bool)
             off[nodes] = False
             assert np.all(field[off] == 0)

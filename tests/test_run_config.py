@@ -33,7 +33,7 @@ def test_run_config_owns_the_checks_the_warnings_and_the_outcome(tmp_path: Path)
     # the same arrays as the command line
     assert main(["run", str(cfg), "-o", str(tmp_path / "cli"), "--no-progress"]) == 0
     with np.load(tmp_path / "out/result.npz") as a, np.load(tmp_path / "cli/result.npz") as b:
-        assert all(np.array_equal(a[k], b[k]) for k in ("u", "wear", "p", "lam"))
+        assert all(np.array_equal(a[k], b[k]) for k in ("u", "wear", "p_soft", "p_rigid"))
     again = vemwear.run_config(cfg, tmp_path / "out", resume=True, progress=False)
     assert again.result is None and "holds a complete run" in again.note
 

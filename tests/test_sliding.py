@@ -409,3 +409,27 @@ def test_resume_of_a_turning_path_with_total_pressure(level) -> None:
     assert ref.p_rigid.max() > 0
     for key in ("wear", "u", "u_nu", "p_rigid", "p_soft", "forces", "residuals"):
         assert np.array_equal(getattr(resumed, key), getattr(ref, key)), key
+
+
+# ------------------------------------------------------------- the wear law, one place
+@pytest.mark.parametrize("wear_on", ["soft", "total"])
+def test_wear_update_and_rate_are_the_loops_and_the_warnings(wear_on) -> None:
+    """On a turning path, every level's wear is ``wear_update`` of the level before with
+    the discretization's ``alpha(t_n)`` (bitwise), and the overshoot measure of the
+    warning is ``max_n k_n max_a alpha(t_n) L_p`` with the same alpha."""
+    from vemwear.simulate.explicit import overshoot
+    from vemwear.simulate.wear import wear_update
+
+    v = lambda t: (np.cos(2 * np.pi * t), np.sin(2 * np.pi * t), 0.0)  # noqa: E731
+    pr = pin(v, steps=8, g=0.02, friction_on="total", wear_on=wear_on)
+    res = simulate(pr)
+    d, t = pr.discrete, pr.time.t
+    assert res.wear[-1].max() > 0
+    for n in range(len(t) - 1):
+        pressure = res.p_soft[n] + (res.p_rigid[n] if wear_on == "total" else 0.0)
+        w = wear_update(res.wear[n], t[n + 1] - t[n], d.alpha(float(t[n])), pressure)
+        assert np.array_equal(res.wear[n + 1], w), n
+    rates = [float(np.max(d.alpha(float(x)))) * 0.4 for x in t[:-1]]  # L_p = c = 0.4
+    expected = max(k * r for k, r in zip(np.diff(t), rates, strict=True))
+    value, _, safe = overshoot(pr)
+    assert rel(value, expected) < 1e-14 and rel(safe, 1 / max(rates)) < 1e-14

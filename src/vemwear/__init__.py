@@ -45,9 +45,10 @@ SPEC 1), so that the lazy names keep their types.
 from __future__ import annotations
 
 import sys
-from importlib import import_module
 from types import ModuleType
 from typing import Any
+
+from .util.lazy import lazy_names
 
 __version__ = "0.1.0"
 
@@ -108,17 +109,8 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    """The top-level API, imported on first use (PEP 562)."""
-    if name in _API:
-        value = getattr(import_module(_API[name]), name)
-        globals()[name] = value  # later look-ups are plain attribute reads
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+# the top-level API, imported on first use (PEP 562)
+__getattr__, __dir__ = lazy_names(__name__, _API)
 
 
 class _Package(ModuleType):

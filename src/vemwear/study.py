@@ -6,12 +6,8 @@ imports neither Dask nor xarray.
 
 from __future__ import annotations
 
-from typing import Any
-
 from . import studies as _studies
+from .util.lazy import lazy_names
 
 __all__ = list(_studies.__all__)
-
-
-def __getattr__(name: str) -> Any:
-    return getattr(_studies, name)
+__getattr__, __dir__ = lazy_names(__name__, dict.fromkeys(__all__, _studies.__name__))

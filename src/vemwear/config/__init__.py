@@ -12,8 +12,9 @@ first used.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from ..util.lazy import lazy_names
 from .errors import ConfigError
 
 if TYPE_CHECKING:
@@ -32,15 +33,12 @@ __all__ = [
     "update_reference",
 ]
 _WHERE = {
-    "apply_overrides": "overrides",
-    "config_json_schema": "reference",
-    "update_reference": "reference",
+    "Config": ".build",
+    "OutputOptions": ".build",
+    "load_config": ".build",
+    "parse_config": ".build",
+    "apply_overrides": ".overrides",
+    "config_json_schema": ".reference",
+    "update_reference": ".reference",
 }
-
-
-def __getattr__(name: str) -> Any:
-    if name in __all__:
-        from importlib import import_module
-
-        return getattr(import_module(f".{_WHERE.get(name, 'build')}", __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__, __dir__ = lazy_names(__name__, _WHERE)

@@ -21,7 +21,7 @@ import functools
 import os
 import tomllib
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -118,6 +118,10 @@ class Sizes:
         Whether a ParaView series is written.
     dim : int
         2 or 3: the dimension of the generated mesh (2 for a mesh file).
+    points, contact : int
+        Once the mesh is built (before the time grid): its vertices, and the vertices of
+        the contact parts that are on no other part (a lower bound of the contact
+        nodes); 0 before.
     """
 
     source: str
@@ -127,6 +131,8 @@ class Sizes:
     stored_u: int
     paraview: bool
     dim: int = 2
+    points: int = 0
+    contact: int = 0
 
 
 def _sizes(src: str, c: s.ConfigFile) -> Sizes:
@@ -153,6 +159,32 @@ def _sizes(src: str, c: s.ConfigFile) -> Sizes:
         stored = -(-L // store)
     kept = max(-(-L // out.every), stored)
     return Sizes(src, L, int(cells), kept, min(stored, L), out.vtk, dim)
+
+
+def _mesh_sizes(sizes: Sizes, mesh: Mesh | Mesh3D, contacts: list[str]) -> Sizes:
+    """``sizes`` with those of the built mesh: vertices, cells, dimension, and the
+    vertices of the contact parts on no other boundary part (each one a contact node)."""
+    three = isinstance(mesh, Mesh3D)
+
+    def vertices(name: str) -> NDArray[np.int64]:
+        if not isinstance(mesh, Mesh3D):
+            return mesh.part_vertices(name)
+        f = mesh.part_faces(name)
+        starts, ends = mesh.face_offsets[f], mesh.face_offsets[f + 1]
+        lens = ends - starts
+        first = np.repeat(starts - np.cumsum(lens) + lens, lens)  # each face's start - rank
+        return np.unique(mesh.face_vertices[first + np.arange(int(lens.sum()))])
+
+    names = [str(n) for n in mesh.part_names]
+    on_contact = [vertices(n) for n in names if n in contacts]
+    elsewhere = [vertices(n) for n in names if n not in contacts]
+    own = np.setdiff1d(
+        np.concatenate([np.zeros(0, np.int64), *on_contact]),
+        np.concatenate([np.zeros(0, np.int64), *elsewhere]),
+    )
+    return replace(
+        sizes, cells=mesh.n_cells, points=mesh.n_points, dim=3 if three else 2, contact=len(own)
+    )
 
 
 # ---------------------------------------------------------------------------- mesh
@@ -401,23 +433,13 @@ def parse_config(
         c = s.ConfigFile.model_validate(data)
     except ValidationError as exc:
         raise from_validation(exc, src) from None
+    sizes = _sizes(src, c)
     if admit is not None:
-        admit(_sizes(src, c))
+        admit(sizes)
     raw: dict[str, Any] = copy.deepcopy(dict(data))  # valid, so plain TOML types only
     with at(src, "[material]"):
         material = Material(c.material.lam, c.material.eta)
     parts = roles(src, c, raw)
-    grid = _time(src, c.time, raw["time"])
-    times = _output_times(src, c.output.times, grid)
-    output = OutputOptions(
-        times,
-        c.output.figures,
-        c.output.vtk,
-        c.output.paraview,
-        _u_levels(src, c.output.store_u, times, grid),
-        c.output.every,
-        c.output.checkpoint,
-    )
     sol = c.solver
     with at(src, "[solver]", raw.get("solver", {})):
         solver = SolverOptions(sol.method, sol.tol, sol.max_iter, sol.backend)
@@ -435,6 +457,19 @@ def parse_config(
         where = "[boundary]"
     else:
         where = f"[mesh] file {c.mesh.file!r}:"
+    if admit is not None:  # with the mesh's sizes, before arrays of L levels are made
+        admit(_mesh_sizes(sizes, mesh, [name for name, *_ in parts.contacts] or ["contact"]))
+    grid = _time(src, c.time, raw["time"])
+    times = _output_times(src, c.output.times, grid)
+    output = OutputOptions(
+        times,
+        c.output.figures,
+        c.output.vtk,
+        c.output.paraview,
+        _u_levels(src, c.output.store_u, times, grid),
+        c.output.every,
+        c.output.checkpoint,
+    )
     problem = _problem(src, c, raw, parts, mesh, material, grid, where)
     check_velocity(src, problem, parts)
     check_loads(src, problem, parts)

@@ -60,7 +60,7 @@ def profile_difference(
     reference, other : Result
         Runs on two meshes of the same domain.
     quantity : str
-        ``wear``, ``u_nu``, ``penetration``, ``lam`` or ``p``.
+        ``wear``, ``u_nu``, ``penetration``, ``p_rigid`` or ``p_soft``.
     time : float
         A time level of both runs.
 

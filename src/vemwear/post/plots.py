@@ -305,7 +305,7 @@ def compare_profiles(
     time : float
         A time level of every run.
     quantity : str or sequence of str
-        One or more of ``wear``, ``u_nu``, ``penetration``, ``lam``, ``p``. With
+        One or more of ``wear``, ``u_nu``, ``penetration``, ``p_rigid``, ``p_soft``. With
         several, each run gets one colour and each quantity one marker/line style
         (Fig 9 shows ``("wear", "u_nu")`` for two meshes).
     path : path, optional

@@ -29,8 +29,8 @@ def contact_point_data(
         ("wear", result.wear),
         ("u_nu", result.u_nu),
         ("penetration", result.penetration),
-        ("lam", result.p_rigid),
-        ("p", result.p_soft),
+        ("p_rigid", result.p_rigid),
+        ("p_soft", result.p_soft),
     ):
         full = np.zeros(n)
         full[nodes] = np.asarray(arr[level])[keep]

@@ -75,10 +75,10 @@ of arrays below, the one place where each array's name, shape and meaning is sta
     ``penetration``             (K, m)     ``u_nu - gap - wear``: the penetration into the
                                            soft layer, the argument of the normal
                                            compliance ``p`` [length]
-    ``lam``                     (K, m)     pressure of the rigid layer, the multiplier
+    ``p_rigid``                 (K, m)     pressure of the rigid layer, the multiplier
                                            of ``u_nu <= g`` (``>= 0``, zero where
                                            ``u_nu < g``) [stress]
-    ``p``                       (K, m)     pressure of the soft layer,
+    ``p_soft``                  (K, m)     pressure of the soft layer,
                                            ``p(u_nu - wear)`` [stress]
     ``iterations``              (K,)       solver iterations of each step problem
     ``residuals``               (K, 3)     final scaled KKT residuals of each step, in
@@ -89,8 +89,14 @@ of arrays below, the one place where each array's name, shape and meaning is sta
                                            complete run; fewer for the partial result of
                                            an interrupted run (levels ``>= completed``
                                            are zero and ``u_levels < completed``)
+    ``format``                  ()         the format of the arrays,
+                                           ``"vemwear-result/2"``
     ``vemwear_version``         ()         version string of the writer
     ==========================  =========  ============================================
+
+    Format 1 (files without ``format``) named ``p_rigid`` ``lam`` and ``p_soft``
+    ``p``; :func:`load_result` and :func:`vemwear.post.stream.read_stream` read such
+    files under today's names (:func:`upgrade_arrays`).
 
     A 3D run (on a :class:`~vemwear.mesh.polyhedra.Mesh3D`) stores the same arrays with
     three components where 2D has two (``points`` (n, 3), ``u`` (S, n, 3),
@@ -104,7 +110,7 @@ of arrays below, the one place where each array's name, shape and meaning is sta
     order of ``Mesh3D.boundary_faces``.
 
 ``summary.json``
-    A JSON object with the keys ``format`` (``"vemwear-result/1"``), ``vemwear_version``,
+    A JSON object with the keys ``format`` (``"vemwear-result/2"``), ``vemwear_version``,
     ``created`` (UTC, ISO 8601), ``inputs`` (``problem``: ``Problem.describe()`` with
     ``parts`` the boundary parts that have edges and, with several contact parts, their
     data under ``contacts`` only; ``extra``: whatever the caller passed, e.g. the
@@ -112,7 +118,8 @@ of arrays below, the one place where each array's name, shape and meaning is sta
     (``Result.solver``), ``statistics`` (levels, contact nodes, iteration totals, the
     largest value of each KKT residual), ``timings`` (``Result.timings``, seconds),
     ``outputs`` (key numbers of the solution: maximal wear at the final time and where,
-    worn area, maximal ``u_nu``, penetration, pressures and displacement) and
+    worn area, maximal ``u_nu``, penetration, pressures ``p_rigid_max`` and
+    ``p_soft_max``, and displacement) and
     ``files``, and ``partial`` (false, or true for the finished levels of an interrupted
     run, with ``completed``, ``levels`` and the ``reason``). Non-finite numbers are written
     as ``null``.
@@ -155,6 +162,7 @@ __all__ = [
     "result_from_arrays",
     "save_result",
     "summarize",
+    "upgrade_arrays",
 ]
 
 #: The cell arrays of a 3D mesh in ``result.npz`` (instead of ``cells_offsets`` and
@@ -170,7 +178,45 @@ MESH3D_ARRAYS = (
 #: File names written by :func:`save_result`.
 NPZ_NAME = "result.npz"
 SUMMARY_NAME = "summary.json"
-FORMAT = "vemwear-result/1"
+#: The format of ``result.npz``, ``result.h5`` and ``summary.json``: 2 names the
+#: pressures ``p_rigid`` and ``p_soft`` as the API does.
+FORMAT = "vemwear-result/2"
+#: The arrays of format 1 that format 2 renamed: old name -> name.
+RENAMED_V1 = {"lam": "p_rigid", "p": "p_soft"}
+_KNOWN_FORMATS = ("vemwear-result/1", FORMAT)
+
+
+def array_format(data: Mapping[str, Any]) -> str:
+    """The format of a result's arrays: their ``format`` (format 1 had none).
+
+    Raises
+    ------
+    ValueError
+        If the arrays are of a format this version does not know (a newer vemwear).
+    """
+    fmt = str(np.asarray(data["format"]).item()) if "format" in data else "vemwear-result/1"
+    if fmt not in _KNOWN_FORMATS:
+        raise ValueError(
+            f"saved result: format {fmt!r} is newer than this vemwear {__version__} reads "
+            f"(up to {FORMAT!r}); update vemwear"
+        )
+    return fmt
+
+
+def upgrade_arrays(data: Mapping[str, Any]) -> dict[str, Any]:
+    """A result's arrays under today's names (the arrays are not copied): format 1's
+    ``lam`` and ``p`` become ``p_rigid`` and ``p_soft``, and ``format`` is set.
+
+    Raises
+    ------
+    ValueError
+        If the arrays are of a newer format (:func:`array_format`).
+    """
+    if array_format(data) == FORMAT:
+        return dict(data)
+    out = {RENAMED_V1.get(k, k): v for k, v in data.items()}
+    out["format"] = np.array(FORMAT, dtype=str)
+    return out
 
 
 def static_arrays(problem: Any, plan: Any) -> dict[str, NDArray[Any]]:
@@ -211,6 +257,7 @@ def static_arrays(problem: Any, plan: Any) -> dict[str, NDArray[Any]]:
         "force_parts": np.array([n for n, _ in problem.discrete.force_parts], dtype=str),
         "force_kinds": np.array([k for _, k in problem.discrete.force_parts], dtype=str),
         "residual_names": np.array(("equilibrium", "feasibility", "complementarity"), dtype=str),
+        "format": np.array(FORMAT, dtype=str),
         "vemwear_version": np.array(__version__, dtype=str),
     }
 
@@ -238,8 +285,8 @@ def result_arrays(result: Result) -> dict[str, NDArray[Any]]:
         wear=np.asarray(result.wear, dtype=np.float64),
         u_nu=np.asarray(result.u_nu, dtype=np.float64),
         penetration=np.asarray(result.penetration, dtype=np.float64),
-        lam=np.asarray(result.p_rigid, dtype=np.float64),
-        p=np.asarray(result.p_soft, dtype=np.float64),
+        p_rigid=np.asarray(result.p_rigid, dtype=np.float64),
+        p_soft=np.asarray(result.p_soft, dtype=np.float64),
         iterations=np.asarray(result.iterations, dtype=np.int64),
         residuals=np.asarray(result.residuals, dtype=np.float64),
         residual_names=np.array(result.RESIDUAL_NAMES, dtype=str),
@@ -328,8 +375,8 @@ def summarize(result: Result) -> dict[str, Any]:
         "u_nu_max_final": _max(u_nu[-1]) if c else float("nan"),
         "penetration_max": _max(pen),
         "penetration_max_final": _max(pen[-1]) if c else float("nan"),
-        "lam_max": _max(np.asarray(result.p_rigid)[:c]),
-        "p_max": _max(np.asarray(result.p_soft)[:c]),
+        "p_rigid_max": _max(np.asarray(result.p_rigid)[:c]),
+        "p_soft_max": _max(np.asarray(result.p_soft)[:c]),
         "displacement_max": float(np.sqrt(_max(usq))),
         "displacement_max_final": float(np.sqrt(_max(usq[-1]))) if len(usq) else float("nan"),
         "nodes_in_contact_final": int(np.sum(pen[-1] > 0)) if c else 0,
@@ -479,12 +526,23 @@ def load_result(path: str | os.PathLike[str]) -> dict[str, NDArray[Any]]:
     Returns
     -------
     dict of str to ndarray
-        Every array of the archive (see the module docstring), fully loaded in memory.
-        0-d string arrays (``vemwear_version``) stay 0-d arrays; use ``.item()``.
+        Every array of the archive (see the module docstring), fully loaded in memory,
+        under today's names (an archive of format 1 is read with ``lam`` and ``p`` as
+        ``p_rigid`` and ``p_soft``). 0-d string arrays (``vemwear_version``) stay 0-d
+        arrays; use ``.item()``.
+
+    Raises
+    ------
+    ValueError
+        If the archive is of a newer format than this vemwear reads.
     """
     p = _npz_path(path)
     with np.load(p, allow_pickle=False) as data:
-        return {k: data[k] for k in data.files}
+        arrays = {k: data[k] for k in data.files}
+    try:
+        return upgrade_arrays(arrays)
+    except ValueError as exc:
+        raise ValueError(f"{p}: {exc}") from None
 
 
 def load_summary(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -545,7 +603,8 @@ def result_from_arrays(
     problem : Problem
         The problem the arrays were computed for (same mesh, contact nodes and time grid).
     data : mapping
-        The output of :func:`load_result` (a complete or a partial result).
+        The output of :func:`load_result` (a complete or a partial result); arrays of
+        format 1 (``lam``, ``p``) are read too.
     solver : mapping, optional
         Stored as ``Result.solver`` (e.g. the ``solver`` of ``summary.json``).
     copy : bool
@@ -565,6 +624,7 @@ def result_from_arrays(
     """
     from ..simulate.loop import Result
 
+    data = upgrade_arrays(data)
     need = (
         "t",
         "points",
@@ -575,8 +635,8 @@ def result_from_arrays(
         "contact_points",
         "wear",
         "u_nu",
-        "lam",
-        "p",
+        "p_rigid",
+        "p_soft",
         "iterations",
         "residuals",
     )
@@ -607,8 +667,8 @@ def result_from_arrays(
     shapes = {
         "wear": (L, m),
         "u_nu": (L, m),
-        "lam": (L, m),
-        "p": (L, m),
+        "p_rigid": (L, m),
+        "p_soft": (L, m),
         "iterations": (L,),
         "residuals": (L, 3),
         "contact_s": (m,),
@@ -649,8 +709,8 @@ def result_from_arrays(
         contact_points=own(np.asarray(data["contact_points"], dtype=np.float64)),
         wear=own(np.asarray(data["wear"], dtype=np.float64)),
         u_nu=own(np.asarray(data["u_nu"], dtype=np.float64)),
-        p_rigid=own(np.asarray(data["lam"], dtype=np.float64)),
-        p_soft=own(np.asarray(data["p"], dtype=np.float64)),
+        p_rigid=own(np.asarray(data["p_rigid"], dtype=np.float64)),
+        p_soft=own(np.asarray(data["p_soft"], dtype=np.float64)),
         iterations=own(np.asarray(data["iterations"], dtype=np.int64)),
         residuals=own(np.asarray(data["residuals"], dtype=np.float64)),
         u_levels=own(u_levels),

@@ -11,10 +11,13 @@ costs no HDF5 call of its own.
 
 The datasets have the names and meanings of the arrays of ``result.npz``
 (:mod:`vemwear.post.results`): the mesh and contact-node arrays, ``t`` (all L levels),
-``levels`` (K) the levels whose rows ``wear``, ``u_nu``, ``penetration``, ``lam``, ``p``,
-``iterations``, ``residuals`` hold, and ``u`` (S, n, d) at ``u_levels`` (d = 2 or 3). ``completed``
-counts the finished levels once the file is closed after the run; while a run goes on
-(or after it was killed) the checkpoint next to the file says how many are final.
+``levels`` (K) the levels whose rows ``wear``, ``u_nu``, ``penetration``, ``p_rigid``,
+``p_soft``, ``iterations``, ``residuals`` hold, and ``u`` (S, n, d) at ``u_levels``
+(d = 2 or 3). ``completed`` counts the finished levels once the file is closed after
+the run; while a run goes on (or after it was killed) the checkpoint next to the file
+says how many are final.
+``format`` is the format of ``result.npz``; a stopped run's file of format 1 (``lam``
+and ``p``) has its two datasets renamed when the run is resumed.
 """
 
 from __future__ import annotations
@@ -27,7 +30,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .results import result_from_arrays, static_arrays
+from .results import (
+    FORMAT,
+    RENAMED_V1,
+    array_format,
+    result_from_arrays,
+    static_arrays,
+    upgrade_arrays,
+)
 
 if TYPE_CHECKING:
     from ..simulate import Problem, Result
@@ -47,7 +57,16 @@ __all__ = [
 #: File name of the streamed result in an output directory.
 STREAM_NAME = "result.h5"
 #: Arrays with one row per kept level, and the shape of a row (m: contact nodes).
-ROW_ARRAYS = ("wear", "u_nu", "penetration", "lam", "p", "iterations", "residuals", "forces")
+ROW_ARRAYS = (
+    "wear",
+    "u_nu",
+    "penetration",
+    "p_rigid",
+    "p_soft",
+    "iterations",
+    "residuals",
+    "forces",
+)
 _BUFFER_BYTES = 1 << 20
 
 
@@ -109,14 +128,15 @@ class H5Sink:
             "wear": ((K, m), np.float64),
             "u_nu": ((K, m), np.float64),
             "penetration": ((K, m), np.float64),
-            "lam": ((K, m), np.float64),
-            "p": ((K, m), np.float64),
+            "p_rigid": ((K, m), np.float64),
+            "p_soft": ((K, m), np.float64),
             "iterations": ((K,), np.int64),
             "residuals": ((K, 3), np.float64),
             "forces": ((K, len(problem.discrete.force_parts), d), np.float64),
         }
         if resume:
             self.file = h5py.File(self.path, "r+")
+            _upgrade_file(self.file)
             for name, (shape, _) in (*shapes.items(), *whole):
                 if name not in self.file or self.file[name].shape != shape:
                     self.file.close()
@@ -169,7 +189,7 @@ class H5Sink:
         b["penetration"][i] = (
             solution.u_nu - w if self.gap is None else solution.u_nu - self.gap - w
         )
-        b["lam"][i], b["p"][i] = solution.p_rigid, solution.p_soft
+        b["p_rigid"][i], b["p_soft"][i] = solution.p_rigid, solution.p_soft
         b["iterations"][i] = solution.iterations
         res = solution.residuals
         b["residuals"][i] = (res["equilibrium"], res["feasibility"], res["complementarity"])
@@ -232,15 +252,47 @@ class H5Sink:
             self.file.close()
 
 
+def _upgrade_file(f: Any) -> None:
+    """Rename the datasets of a format-1 ``result.h5`` open for writing to today's
+    names and record the format; each step can be repeated, so a file whose upgrade was
+    cut short is finished the next time."""
+    fmt = f["format"][()].decode("utf-8") if "format" in f else None
+    array_format({} if fmt is None else {"format": np.array(fmt)})  # refuses newer ones
+    if fmt == FORMAT:
+        return
+    for old, new in RENAMED_V1.items():
+        if old in f and new not in f:
+            f.move(old, new)
+    f.create_dataset("format", data=np.char.encode(np.array(FORMAT), "utf-8"))
+    f.flush()
+
+
 def read_stream(
     path: str | os.PathLike[str], names: tuple[str, ...] | None = None
 ) -> dict[str, NDArray[Any]]:
-    """Read the datasets of a ``result.h5`` (all, or ``names``) into memory."""
+    """Read the datasets of a ``result.h5`` (all, or ``names``) into memory, under
+    today's names (a file of format 1 is read with ``lam`` and ``p`` as ``p_rigid`` and
+    ``p_soft``: :func:`~vemwear.post.results.upgrade_arrays`).
+
+    Raises
+    ------
+    ValueError
+        If the file is of a newer format than this vemwear reads.
+    """
     h5py = _h5py()
     with h5py.File(path, "r") as f:
+        old = "format" not in f
+        back = {v: k for k, v in RENAMED_V1.items()} if old else {}
         keys = names if names is not None else tuple(f.keys())
-        out = {k: np.asarray(f[k][()]) for k in keys}
-    return {k: np.char.decode(v, "utf-8") if v.dtype.kind == "S" else v for k, v in out.items()}
+        out = {k: np.asarray(f[back.get(k, k)][()]) for k in keys}
+    out = {k: np.char.decode(v, "utf-8") if v.dtype.kind == "S" else v for k, v in out.items()}
+    if old and names is None:
+        return upgrade_arrays(out)
+    try:
+        array_format(out)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
+    return out
 
 
 def result_from_stream(

@@ -8,8 +8,8 @@ Every ``.vtu`` holds the polygonal mesh (triangles, quads and general polygons) 
 
 point data
     ``displacement`` (3 components, z = 0, for the *Warp By Vector* filter),
-    ``wear``, ``u_nu``, ``penetration`` (``u_nu - wear``), ``lam`` (rigid-layer
-    pressure), ``p`` (soft-layer pressure) at the contact nodes and 0 elsewhere, and
+    ``wear``, ``u_nu``, ``penetration`` (``u_nu - wear``), ``p_rigid`` (rigid-layer
+    pressure), ``p_soft`` (soft-layer pressure) at the contact nodes and 0 elsewhere, and
     ``contact`` (1 at the contact nodes, 0 elsewhere);
 cell data
     ``strain``: the strain of the projection, ``eps(Pi u_h)`` (constant per cell, paper

@@ -5,7 +5,7 @@ not read by every ParaView reader), so a 3D run is always written as
 ``<name>.pvd`` + ``<name>/<name>_NNNN.vtu``, one VTU file per stored level, through
 :func:`vemwear.mesh.io3d.write_mesh3d` (VTK polyhedron cells, faces listed outward; the
 boundary parts as field data). Point data: ``displacement`` (3 components), ``wear``,
-``u_nu``, ``penetration``, ``lam``, ``p``, ``contact`` (1 on the contact nodes; the
+``u_nu``, ``penetration``, ``p_rigid``, ``p_soft``, ``contact`` (1 on the contact nodes; the
 contact quantities are 0 elsewhere); cell data: ``strain`` and ``stress`` (3x3 tensors of
 the projection ``Pi u``, ``sigma = 2 eta eps + lam tr(eps) I``), ``von_mises`` and
 ``cell_id``.

@@ -5,7 +5,7 @@ share one mesh; the heavy data (``.h5``) holds the mesh once and the fields of e
 stored level, written level by level, so a long series needs neither one file per
 level nor all levels in memory. The fields are those of the VTU series
 (:mod:`vemwear.post.vtk`): point data ``displacement`` (3 components), ``wear``,
-``u_nu``, ``penetration``, ``lam``, ``p``, ``contact``; cell data ``strain``,
+``u_nu``, ``penetration``, ``p_rigid``, ``p_soft``, ``contact``; cell data ``strain``,
 ``stress`` (3x3 tensors), ``von_mises``, ``cell_id``.
 
 For a run of order k = 2 that kept all its dofs (:attr:`vemwear.simulate.Result.dofs`),

@@ -5,7 +5,8 @@
 run is checked, so that every refusal is as cheap as it can be:
 
 1. a run holding OUTDIR's lock refuses before the configuration is even read;
-2. the rough plan (sizes read from the file alone) refuses before the mesh is built
+2. the rough plan (sizes read from the file alone) refuses before the mesh is built,
+   and again with the built mesh's sizes before the time grid is made
    (:func:`vemwear.runner.plan.admit_sizes`);
 3. the configuration is validated and built (mesh, time grid, data);
 4. the plan of the real mesh refuses before anything is assembled;

@@ -55,7 +55,11 @@ certainly asks for. The estimate grows with every size (and the memory this proc
 holds only grows meanwhile), so the rough estimate is at most the real-mesh one: it
 refuses only runs that the real-mesh estimate refuses too, and refuses them in a
 fraction of a second, before anything large is allocated (``steps = 1e9``,
-``n_cells = 1e8``).
+``n_cells = 1e8``). The hook runs a second time once the mesh is built and before the
+time grid is: with the mesh's vertices and cells, and the vertices of the contact parts
+that lie on no other part (each one a contact node) instead of 2, so that many levels on
+a mesh of many contact nodes (``steps = 2e7`` on 64 x 32 squares) are refused before any
+array of L levels is made.
 """
 
 from __future__ import annotations
@@ -233,9 +237,9 @@ def _estimate_sizes(sizes: Sizes) -> Estimate:
     three = sizes.dim == 3
     return estimate(
         levels=sizes.levels,
-        points=sizes.cells // 6 + 4 if three else sizes.cells // 2 + 1,
+        points=max(sizes.points, sizes.cells // 6 + 4 if three else sizes.cells // 2 + 1),
         cells=sizes.cells,
-        contact=2,
+        contact=max(sizes.contact, 2),
         kept=sizes.kept,
         stored_u=sizes.stored_u,
         paraview=sizes.paraview,

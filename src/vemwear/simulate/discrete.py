@@ -32,6 +32,7 @@ from ..contact import (
 from ..solvers.protocol import StepSolver
 from ..solvers.system import ContactSystem, StepData, StepSolution
 from .constraints import describe_motions
+from .wear import wear_rate, wear_update
 
 if TYPE_CHECKING:
     from .problem import Problem
@@ -300,7 +301,7 @@ class Discretization:
                 # n* . tau_a = -sign(v*_tau . tau_a): friction opposes the tangential
                 # sliding, and vanishes where the foundation does not slide along the
                 # boundary
-                s = _Sliding(t, v, self.mu * -np.sign(v), self.kappa * np.abs(v))
+                s = _Sliding(t, v, self.mu * -np.sign(v), wear_rate(self.kappa, np.abs(v)))
             self._sliding_at = s
         return s
 
@@ -317,7 +318,7 @@ class Discretization:
         v = np.concatenate([np.where(still, 0.0, v1), np.where(still, 0.0, v2)])
         unit = np.where(still, 0.0, 1.0 / np.where(still, 1.0, speed))
         fric = np.concatenate([self.mu * -v1 * unit, self.mu * -v2 * unit])
-        return _Sliding(t, v, fric, self.kappa * np.where(still, 0.0, speed))
+        return _Sliding(t, v, fric, wear_rate(self.kappa, np.where(still, 0.0, speed)))
 
     @functools.cached_property
     def steady_sliding(self) -> bool:
@@ -359,12 +360,35 @@ class Discretization:
         """``alpha(t) = kappa |v*_tau(t)|`` at the contact nodes (2.2 for any Gamma_C)."""
         return self._sliding(t).alpha
 
-    def wear_pressure(self, p_soft: NDArray[np.float64], p_rigid: NDArray[np.float64]) -> Any:
+    def wear_pressure(
+        self, p_soft: NDArray[np.float64], p_rigid: NDArray[np.float64] | None
+    ) -> Any:
         """The pressure of the wear rate (3.22): ``p_soft`` (the paper's; the rigid layer
-        does not wear), plus ``p_rigid`` at the nodes of ``wear_on = "total"``."""
+        does not wear), plus ``p_rigid`` at the nodes of ``wear_on = "total"`` (then
+        ``p_rigid`` must be given)."""
         if self.wear_total is None:
             return p_soft
+        if p_rigid is None:
+            raise ValueError("the wear of wear_on = 'total' needs the rigid-layer pressure")
         return p_soft + np.where(self.wear_total, p_rigid, 0.0)
+
+    def next_wear(
+        self,
+        level: int,
+        w: NDArray[np.float64],
+        p_soft: NDArray[np.float64],
+        p_rigid: NDArray[np.float64] | None,
+    ) -> Any:
+        """``w^{n+1}`` from the wear and the pressures of level ``n = level`` (3.22):
+        :func:`~vemwear.simulate.wear.wear_update` with ``alpha(t_n)`` and
+        :meth:`wear_pressure`."""
+        t = self.problem.time.t
+        return wear_update(
+            w,
+            t[level + 1] - t[level],
+            self.alpha(float(t[level])),
+            self.wear_pressure(p_soft, p_rigid),
+        )
 
     @property
     def force_parts(self) -> tuple[tuple[str, str], ...]:

@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .wear import wear_rate
+
 if TYPE_CHECKING:
     from .problem import Problem
 
@@ -54,14 +56,14 @@ def overshoot(problem: Problem) -> tuple[float, int, float]:
                 for n in range(len(t) - 1):
                     V = pc.velocity.at(P, float(t[n]))
                     V_tau = V - np.sum(V * nu, axis=1)[:, None] * nu
-                    r_n = float((k * np.linalg.norm(V_tau, axis=1) * lp).max())
+                    r_n = float((wear_rate(k, np.linalg.norm(V_tau, axis=1)) * lp).max())
                     rate[n] = max(rate[n], np.inf if np.isnan(r_n) else r_n)
                 continue
             block = max(1, 2**20 // len(tau))
             for a in range(0, len(t) - 1, block):
                 b = min(a + block, len(t) - 1)
                 V = velocity_levels(pc.velocity, t[a:b])
-                r = (k * np.abs(V @ tau.T) * lp).max(axis=1)
+                r = (wear_rate(k, np.abs(V @ tau.T)) * lp).max(axis=1)
                 rate[a:b] = np.maximum(rate[a:b], np.where(np.isnan(r), np.inf, r))
         value = np.diff(t) * rate
     n = int(np.argmax(value))

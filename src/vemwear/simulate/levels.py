@@ -194,11 +194,6 @@ def run_levels(
         c, w_, g_ = now
         return LoopState(c, w_, g_, [Pending(n_, wn, so) for n_, wn, _, so in pending if n_ < c])
 
-    def wear_next(n_: int, w_: Any, p_soft: Any) -> Any:
-        """w^{n+1} (3.22), the left rectangle rule."""
-        with np.errstate(all="ignore"):
-            return w_ + (tgrid[n_ + 1] - tgrid[n_]) * d.alpha(float(tgrid[n_])) * p_soft
-
     # A constant load and a solver that predicts (a piecewise-linear law): runs of
     # levels on one piece of the step problem, certified together (solvers/pieces.py),
     # as long as the friction stays the same; each level has the same numbers as in
@@ -221,7 +216,8 @@ def run_levels(
 
         def advance(p_soft: Any) -> Any:
             n_next = n_ + len(ws)
-            ws.append(wear_next(n_next - 1, ws[-1], p_soft))  # v* at t_{n_next - 1}
+            # v* at t_{n_next - 1}; runs are made only when p_soft alone wears
+            ws.append(d.next_wear(n_next - 1, ws[-1], p_soft, None))
             if not d.steady_sliding and not np.array_equal(
                 d.friction(float(tgrid[n_next])), first.fric
             ):
@@ -267,11 +263,7 @@ def run_levels(
                 callback(n, sol)
             w_next = w
             if n + 1 < L:  # wear update (3.22)
-                w_next = (
-                    wear_next(n, w, d.wear_pressure(sol.p_soft, sol.p_rigid))
-                    if w_after is None
-                    else w_after
-                )
+                w_next = d.next_wear(n, w, sol.p_soft, sol.p_rigid) if w_after is None else w_after
                 if not np.isfinite(w_next).all():
                     raise _wear_overflow(problem, n, w_next)
             now = (n + 1, w_next, sol)

@@ -397,9 +397,7 @@ def _restart(out: Result, prev: Result, problem: Problem) -> LoopState:
     out.completed = c
     if c == len(out.t):
         return LoopState(c, out.wear[-1].copy())
-    w = out.wear[c - 1] + (out.t[c] - out.t[c - 1]) * d.alpha(
-        float(out.t[c - 1])
-    ) * d.wear_pressure(out.p_soft[c - 1], out.p_rigid[c - 1])
+    w = d.next_wear(c - 1, out.wear[c - 1], out.p_soft[c - 1], out.p_rigid[c - 1])
     u_last = None
     if slot[c - 1] >= 0 and out.u[slot[c - 1]].size == d.n_dof:
         # the stored vertex values are all the dofs for k = 1 only (k = 2: no guess of u)

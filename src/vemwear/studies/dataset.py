@@ -19,8 +19,9 @@ Variables per run (NaN for a failed run):
 
 ``max_wear``        max of the wear w at the final time T [length]
 ``worn_volume``     ``sum(omega_a * w_a)`` at T, the worn area (volume per unit depth)
-``max_pressure``    max of the soft-layer pressure p over every level and node [stress]
-``max_rigid_pressure``  max of the rigid-layer pressure (``lam`` of ``result.npz``)
+``max_p_soft``      max of the soft-layer pressure ``p_soft`` over every level and node
+                    [stress]
+``max_p_rigid``     max of the rigid-layer pressure ``p_rigid`` [stress]
 ``iterations``      solver iterations summed over the steps (an integer; -1 for a
                     failed run)
 ``wall_time``       seconds the run took on its worker (NaN for runs of an earlier
@@ -28,7 +29,7 @@ Variables per run (NaN for a failed run):
 ``status``          ``done`` or ``failed``; ``error`` the failure's message
 ``run_id``          the run's directory under ``OUTDIR/runs``
 
-Profiles along Gamma_C over time, ``(..., time, s)``: ``wear``, ``u_nu``, ``p``; force
+Profiles along Gamma_C over time, ``(..., time, s)``: ``wear``, ``u_nu``, ``p_soft``; force
 resultants ``forces`` ``(..., time, part, component)``. When the runs have different
 meshes they are interpolated (linearly) onto a common arc-length grid (as many points
 as the finest run, from the smallest to the largest arc length); when their time
@@ -65,8 +66,8 @@ STUDY_NC = "study.nc"
 SCALARS = (
     "max_wear",
     "worn_volume",
-    "max_pressure",
-    "max_rigid_pressure",
+    "max_p_soft",
+    "max_p_rigid",
     "iterations",
     "wall_time",
 )
@@ -75,8 +76,8 @@ SCALARS = (
 _CF: dict[str, tuple[str, str]] = {
     "max_wear": ("max of the wear w at the final time T", "length"),
     "worn_volume": ("sum of omega_a w_a at T: worn area (volume per unit depth)", "length2"),
-    "max_pressure": ("max of the soft-layer pressure p over t and s", "stress"),
-    "max_rigid_pressure": ("max of the rigid-layer pressure (lam) over t and s", "stress"),
+    "max_p_soft": ("max of the soft-layer pressure p_soft over t and s", "stress"),
+    "max_p_rigid": ("max of the rigid-layer pressure p_rigid over t and s", "stress"),
     "iterations": ("solver iterations summed over the steps (-1: failed run)", "1"),
     "wall_time": ("seconds of the run on its worker", "s"),
     "status": ("status of the run: done or failed", ""),
@@ -84,7 +85,7 @@ _CF: dict[str, tuple[str, str]] = {
     "run_id": ("directory of the run under OUTDIR/runs", ""),
     "wear": ("wear w of the soft layer", "length"),
     "u_nu": ("normal displacement u_nu at the contact nodes", "length"),
-    "p": ("soft-layer pressure p(u_nu - w)", "stress"),
+    "p_soft": ("soft-layer pressure p(u_nu - w)", "stress"),
     "forces": ("force resultant on each boundary part (per unit depth in 2D)", "force"),
     "time": ("time", "time (the unit of [time] T)"),
     "s": ("arc length along Gamma_C", "length"),
@@ -138,11 +139,13 @@ def run_arrays(result: Any) -> dict[str, NDArray[Any]]:
 
 
 def _load(out: Path, rid: str) -> dict[str, NDArray[Any]] | None:
-    from ..post.results import NPZ_NAME
+    """A finished run's arrays under today's names (a run of an earlier execution may
+    have written format 1), or None if its file cannot be read."""
+    from ..post.results import NPZ_NAME, upgrade_arrays
 
     try:
         with np.load(out / RUNS_DIR / rid / NPZ_NAME, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files if _wanted(k)}
+            return upgrade_arrays({k: z[k] for k in z.files if _wanted(k)})
     except (OSError, ValueError):
         return None
 
@@ -244,8 +247,8 @@ def build_dataset(study: Study, execution: Execution, out: str | Path) -> Any:
         wT = np.asarray(res["wear"][-1], dtype=np.float64)
         scal["max_wear"][at] = float(wT.max(initial=0.0))
         scal["worn_volume"][at] = float(np.dot(res["contact_weights"], wT))
-        scal["max_pressure"][at] = float(np.max(res["p"], initial=0.0))
-        scal["max_rigid_pressure"][at] = float(np.max(res["lam"], initial=0.0))
+        scal["max_p_soft"][at] = float(np.max(res["p_soft"], initial=0.0))
+        scal["max_p_rigid"][at] = float(np.max(res["p_rigid"], initial=0.0))
         scal["iterations"][at] = float(np.sum(res["iterations"]))
     iters = np.where(np.isnan(scal["iterations"]), -1, scal["iterations"]).astype(np.int64)
     data: dict[str, Any] = {n: (dims, v) for n, v in scal.items() if n != "iterations"}
@@ -308,7 +311,7 @@ def _profiles(
             coords["s"] = ("node", s)
         else:
             coords["s"] = ("s", s)
-        for name in ("wear", "u_nu", "p"):
+        for name in ("wear", "u_nu", "p_soft"):
             arr = np.full((*shape, t.size, s.size), np.nan)
             for rid, res in results.items():
                 a = _interp(s, res["contact_s"], res[name], axis=1)

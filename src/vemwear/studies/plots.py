@@ -22,7 +22,7 @@ from ..util.atomic import atomic_file, write_atomic
 __all__ = ["PLOTTED", "plot_fit", "plot_profiles", "plot_summary", "write_report"]
 
 #: The scalars of ``summary.png``.
-PLOTTED = ("max_wear", "worn_volume", "max_pressure", "iterations", "wall_time")
+PLOTTED = ("max_wear", "worn_volume", "max_p_soft", "iterations", "wall_time")
 _MAX_LINES = 64
 DPI = 120
 
@@ -126,7 +126,7 @@ def write_report(ds: Any, path: str | Path, figures: list[Path]) -> Path:
     keys: list[str] = json.loads(ds.attrs.get("axis_variables", ds.attrs["axes"]))
     dims = list(ds["max_wear"].dims)
     flat = ds.stack(_run=dims) if dims else ds
-    cols = ["run", *keys, "status", "max_wear", "worn_volume", "max_pressure", "iterations"]
+    cols = ["run", *keys, "status", "max_wear", "worn_volume", "max_p_soft", "iterations"]
     lines = [
         f"# Study: {ds.attrs['title']}",
         "",
