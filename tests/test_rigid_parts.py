@@ -202,7 +202,6 @@ def test_summary_reports_the_holders_translation(tmp_path: Any) -> None:
     [
         *((m, n, False) for m in ("newton", "uzawa") for n in (0, 3, 6)),
         *(("newton", n, True) for n in (0, 3, 6)),
-        ("uzawa", 3, True),  # (Uzawa's outer iteration on two amplitudes: slower)
     ],
 )
 def test_a_holders_run_resumes_bitwise(method: str, level: int, turning: bool) -> None:
