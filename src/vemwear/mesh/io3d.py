@@ -29,7 +29,6 @@ from collections.abc import Mapping
 from itertools import chain
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -39,6 +38,15 @@ from .generate3d import HEX_FACES, TET_FACES, cell_loops
 from .geometry3d import reverse_loops, take_loops
 from .polyhedra import Mesh3D
 from .polymesh import PARTS, MeshError
+
+
+def _quoteattr(text: str) -> str:
+    """``xml.sax.saxutils.quoteattr`` (imported here: its module pulls in urllib, http
+    and ssl, 40 ms of every run's start that writes no 3D file)."""
+    from xml.sax.saxutils import quoteattr
+
+    return quoteattr(text)
+
 
 if TYPE_CHECKING:
     import meshio
@@ -92,7 +100,7 @@ def _array(name: str, a: NDArray, extra: str = "") -> str:
         a = a.astype(np.int64)
     ncomp = "" if a.ndim == 1 else f' NumberOfComponents="{a.shape[1]}"'
     return (
-        f'<DataArray type="{kind}{8 * a.dtype.itemsize}" Name={quoteattr(name)}{ncomp}'
+        f'<DataArray type="{kind}{8 * a.dtype.itemsize}" Name={_quoteattr(name)}{ncomp}'
         f'{extra} format="binary">{_b64(a.ravel())}</DataArray>\n'
     )
 
