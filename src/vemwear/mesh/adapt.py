@@ -5,12 +5,16 @@
 * :func:`neighbour_pairs`: the pairs of cells that share an edge piece (a hanging node is
   a vertex of both cells, so every piece is a directed edge of one cell whose reverse is
   a directed edge of the other).
-* :func:`graded_closure` and :func:`refine_graded`: refine the marked cells and as many
-  others as needed so that the refinement levels of neighbours differ by at most
-  ``max_difference`` (one hanging node per side for the default 1).
+* :func:`graded_closure`, :func:`refine_tree` and :func:`refine_graded`: refine the
+  marked cells and as many others as needed so that the refinement levels of neighbours
+  differ by at most ``max_difference`` (one hanging node per side for the default 1);
+  :class:`CellTree` records the levels and the families of children, for coarsening
+  (:mod:`vemwear.mesh.coarsen`).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -18,7 +22,14 @@ from numpy.typing import ArrayLike, NDArray
 from .polymesh import Mesh
 from .refine import refine_cells
 
-__all__ = ["dorfler_marking", "graded_closure", "neighbour_pairs", "refine_graded"]
+__all__ = [
+    "CellTree",
+    "dorfler_marking",
+    "graded_closure",
+    "neighbour_pairs",
+    "refine_graded",
+    "refine_tree",
+]
 
 IntArray = NDArray[np.int64]
 
@@ -104,6 +115,53 @@ def graded_closure(
         refine[b[need]] = True
 
 
+@dataclass(frozen=True)
+class CellTree:
+    """The refinement history of the cells of an adaptive mesh.
+
+    Attributes
+    ----------
+    level : (n_cells,) int array
+        Refinement level (0 on the initial mesh).
+    family : (n_cells,) int array
+        The refinement the cell was born in (its siblings share it); -1 on the initial mesh.
+    parent_family : (n_families,) int array
+        For every refinement, the family of the cell that was refined.
+    born : (n_families,) int array
+        For every refinement, the number of children it made.
+    """
+
+    level: IntArray
+    family: IntArray
+    parent_family: IntArray
+    born: IntArray
+
+    @classmethod
+    def initial(cls, n_cells: int) -> CellTree:
+        """Every cell of an initial mesh: level 0, no family."""
+        none = np.zeros(0, np.int64)
+        return cls(np.zeros(n_cells, np.int64), np.full(n_cells, -1, np.int64), none, none)
+
+
+def refine_tree(
+    mesh: Mesh, tree: CellTree, marked: ArrayLike, max_difference: int = 1
+) -> tuple[Mesh, CellTree, IntArray]:
+    """Refine the marked cells and their graded closure; the new mesh, its tree, and for
+    every new cell the old cell it comes from."""
+    cells = graded_closure(mesh, tree.level, marked, max_difference)
+    new, parent = refine_cells(mesh, cells, return_parent=True)
+    split = np.zeros(mesh.n_cells, dtype=bool)
+    split[cells] = True
+    rank = np.cumsum(split) - 1  # the k-th refined cell starts family n_families + k
+    nf = len(tree.parent_family)
+    child = split[parent]
+    family = np.where(child, nf + rank[parent], tree.family[parent])
+    level = tree.level[parent] + child
+    pf = np.concatenate([tree.parent_family, tree.family[cells]])
+    born = np.concatenate([tree.born, np.bincount(rank[parent[child]], minlength=len(cells))])
+    return new, CellTree(level, family, pf, born), parent
+
+
 def refine_graded(
     mesh: Mesh, level: ArrayLike, marked: ArrayLike, max_difference: int = 1
 ) -> tuple[Mesh, IntArray, IntArray]:
@@ -119,8 +177,8 @@ def refine_graded(
         The cell of the old mesh every new cell comes from.
     """
     lev = np.asarray(level, dtype=np.int64)
-    cells = graded_closure(mesh, lev, marked, max_difference)
-    new, parent = refine_cells(mesh, cells, return_parent=True)
-    split = np.zeros(mesh.n_cells, dtype=np.int64)
-    split[cells] = 1
-    return new, lev[parent] + split[parent], parent
+    tree = CellTree(
+        lev, np.full(len(lev), -1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
+    )
+    new, tree2, parent = refine_tree(mesh, tree, marked, max_difference)
+    return new, tree2.level, parent
