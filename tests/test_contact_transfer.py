@@ -37,14 +37,16 @@ def test_kept_nodes_exactly_and_new_nodes_by_linear_interpolation() -> None:
     xs, ws = cb.points[order, 0], w[order]
     for i in new:
         j = np.searchsorted(xs, cb2.points[i, 0])
-        # the edge from the clamped corner (0, 0), not a contact node, is constant
-        expected = ws[0] if j == 0 else 0.5 * (ws[j - 1] + ws[j])
+        # the clamped corner (0, 0) is not a contact node: 0 there
+        expected = 0.5 * ws[0] if j == 0 else 0.5 * (ws[j - 1] + ws[j])
         assert w2[i] == pytest.approx(expected, rel=1e-14)
     # and back after coarsening: the values of the kept nodes, bitwise
     back, _, _ = coarsen_tree(fine, tree, np.arange(fine.n_cells))
     cb3 = _nodes(back)
     w3 = transfer_along_contact(fine, cb2.nodes, w2, cb3.points)
     assert np.array_equal(np.sort(w3), np.sort(w))
+    # the nodal quadrature of the wear is kept by refinement
+    assert np.sum(cb2.weights * w2) == pytest.approx(np.sum(cb.weights * w), rel=1e-14)
 
 
 def test_a_linear_wear_is_carried_exactly_and_a_stray_point_is_refused() -> None:

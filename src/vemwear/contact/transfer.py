@@ -5,7 +5,9 @@ A value of the old mesh lives at its contact nodes and is piecewise linear along
 contact edges (docs/method.md section 3). A new node that is an old vertex takes the old
 value there, exactly (bitwise); a new node inside an old contact edge (a midpoint made by
 refinement) takes the linear interpolant along that edge. An end of an old edge that is
-not a contact node (a clamped end of Gamma_C) takes the value of the edge's other end.
+not a contact node (a clamped end of Gamma_C) carries 0, the convention of the nodal
+quadrature (its weight there is 0): refinement then keeps the integral of the values by
+the nodal quadrature, and the worn volume with it.
 Refining and coarsening keep Gamma_C as a set, so every new node lies on an old contact
 edge; a point that does not is refused, naming it.
 """
@@ -64,10 +66,8 @@ def transfer_along_contact(
     node_of = np.full(mesh.n_points, -1, dtype=np.int64)
     node_of[nodes] = np.arange(len(nodes))
     ia, ib = node_of[E[:, 0]], node_of[E[:, 1]]
-    if np.any((ia < 0) & (ib < 0)):
-        raise MeshError("a contact edge has no contact node at either end")
-    va = np.where(ia >= 0, v[np.maximum(ia, 0)], v[np.maximum(ib, 0)])
-    vb = np.where(ib >= 0, v[np.maximum(ib, 0)], v[np.maximum(ia, 0)])
+    va = np.where(ia >= 0, v[np.maximum(ia, 0)], 0.0) if len(v) else np.zeros(len(E))
+    vb = np.where(ib >= 0, v[np.maximum(ib, 0)], 0.0) if len(v) else np.zeros(len(E))
     A, B = mesh.points[E[:, 0]], mesh.points[E[:, 1]]
     tol = extent_tol(mesh.points, None)
     k = min(8, len(E))

@@ -77,6 +77,8 @@ def coarsen_tree(
     """
     nc = mesh.n_cells
     fam = tree.family
+    if len(tree.parent_family) == 0:  # nothing was refined
+        return mesh, tree, np.arange(nc, dtype=np.int64)
     want = np.zeros(nc, dtype=bool)
     want[np.asarray(marked, dtype=np.int64)] = True
     # a family may merge when all its children are present (none refined further) and
