@@ -98,3 +98,28 @@ def test_the_wear_moves_to_the_new_contact_nodes(runs) -> None:
 def test_inconsistent_settings_are_refused(kw: dict, match: str) -> None:
     with pytest.raises(ValueError, match=match):
         simulate_adaptive(_moving_load(), **kw)
+
+
+def test_the_paraview_series_carries_every_mesh(runs, tmp_path) -> None:
+    import xml.etree.ElementTree as ET
+
+    import meshio
+
+    from vemwear.post.adaptive import write_adaptive_series
+
+    segs, _ = runs
+    pvd = write_adaptive_series(segs, tmp_path)
+    files = [(float(d.get("timestep")), d.get("file")) for d in ET.parse(pvd).iter("DataSet")]
+    assert len(files) == 17  # levels 0 .. 16, each once
+    times = [t for t, _ in files]
+    assert times == sorted(times) and times[-1] == 1.0
+    for s in segs:
+        for lv in (s.first, s.last - 1):
+            m = meshio.read(tmp_path / files[lv][1])
+            n_cells = sum(len(c.data) for c in m.cells)
+            assert n_cells == s.problem.mesh.n_cells
+            assert np.allclose(m.points[:, :2], s.problem.mesh.points)
+            wear = m.point_data["wear"]
+            assert np.allclose(wear[s.result.contact_nodes], s.result.wear[lv])
+            levels = np.concatenate(m.cell_data["level"])
+            assert levels.max() == s.tree.level.max()
