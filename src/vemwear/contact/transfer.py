@@ -18,7 +18,6 @@ from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 from ..mesh.locate import extent_tol, point_segment_distance
 from ..mesh.polymesh import Mesh, MeshError
@@ -69,6 +68,8 @@ def transfer_along_contact(
     va = np.where(ia >= 0, v[np.maximum(ia, 0)], 0.0) if len(v) else np.zeros(len(E))
     vb = np.where(ib >= 0, v[np.maximum(ib, 0)], 0.0) if len(v) else np.zeros(len(E))
     A, B = mesh.points[E[:, 0]], mesh.points[E[:, 1]]
+    from scipy.spatial import cKDTree  # imported when used: a run without adaptivity never is
+
     tol = extent_tol(mesh.points, None)
     k = min(8, len(E))
     _, cand = cKDTree(0.5 * (A + B)).query(X, k=k)
