@@ -1,0 +1,94 @@
+"""Nodal values on Gamma_C carried to the contact nodes of another mesh (docs/method.md,
+section 11): the wear when an adaptive mesh changes.
+
+A value of the old mesh lives at its contact nodes and is piecewise linear along its
+contact edges (docs/method.md section 3). A new node that is an old vertex takes the old
+value there, exactly (bitwise); a new node inside an old contact edge (a midpoint made by
+refinement) takes the linear interpolant along that edge. An end of an old edge that is
+not a contact node (a clamped end of Gamma_C) carries 0, the convention of the nodal
+quadrature (its weight there is 0): refinement then keeps the integral of the values by
+the nodal quadrature, and the worn volume with it.
+Refining and coarsening keep Gamma_C as a set, so every new node lies on an old contact
+edge; a point that does not is refused, naming it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..mesh.locate import extent_tol, point_segment_distance
+from ..mesh.polymesh import Mesh, MeshError
+
+__all__ = ["transfer_along_contact"]
+
+
+def transfer_along_contact(
+    mesh: Mesh,
+    nodes: ArrayLike,
+    values: ArrayLike,
+    points: ArrayLike,
+    parts: Sequence[str] = ("contact",),
+) -> NDArray[np.float64]:
+    """The piecewise linear function of ``values`` along the contact edges of ``mesh``,
+    at ``points`` (module docstring).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The old mesh.
+    nodes : (m,) int array_like
+        Its contact nodes (vertex ids, k = 1).
+    values : (m,) array_like
+        The values there.
+    points : (q, 2) array_like
+        The new contact nodes.
+    parts : sequence of str
+        The contact parts whose edges carry the function.
+
+    Returns
+    -------
+    (q,) array
+    """
+    nodes = np.asarray(nodes, dtype=np.int64)
+    v = np.asarray(values, dtype=float)
+    if v.shape != nodes.shape:
+        raise ValueError(
+            f"values must have one entry per contact node ({len(nodes)}), got {v.shape}"
+        )
+    X = np.asarray(points, dtype=float).reshape(-1, 2)
+    E = np.concatenate([mesh.part_edges(p) for p in parts])
+    if len(E) == 0:
+        raise MeshError(f"the mesh has no edges on the contact parts {list(parts)}")
+    node_of = np.full(mesh.n_points, -1, dtype=np.int64)
+    node_of[nodes] = np.arange(len(nodes))
+    ia, ib = node_of[E[:, 0]], node_of[E[:, 1]]
+    va = np.where(ia >= 0, v[np.maximum(ia, 0)], 0.0) if len(v) else np.zeros(len(E))
+    vb = np.where(ib >= 0, v[np.maximum(ib, 0)], 0.0) if len(v) else np.zeros(len(E))
+    A, B = mesh.points[E[:, 0]], mesh.points[E[:, 1]]
+    from scipy.spatial import cKDTree  # imported when used: a run without adaptivity never is
+
+    tol = extent_tol(mesh.points, None)
+    k = min(8, len(E))
+    _, cand = cKDTree(0.5 * (A + B)).query(X, k=k)
+    cand = np.asarray(cand).reshape(len(X), k)
+    dist, s = point_segment_distance(X[:, None, :], A[cand], B[cand])
+    best = np.argmin(dist, axis=1)
+    rows = np.arange(len(X))
+    e = cand[rows, best]
+    if np.any(dist[rows, best] > tol):
+        q = int(np.flatnonzero(dist[rows, best] > tol)[0])
+        raise MeshError(
+            f"new contact node {q} at {X[q].tolist()} lies on no contact edge of the old mesh"
+        )
+    t = s[rows, best]
+    out = (1.0 - t) * va[e] + t * vb[e]
+    # kept vertices: the old value itself, not a rounded interpolant
+    L = np.linalg.norm(B[e] - A[e], axis=1)
+    at_a = t * L <= tol
+    at_b = (1.0 - t) * L <= tol
+    out[at_a] = va[e[at_a]]
+    out[at_b] = vb[e[at_b]]
+    return out

@@ -1,0 +1,171 @@
+"""Adaptive meshes in a time-dependent run (docs/method.md, section 11): the mesh changes
+every few levels and follows the contact zone.
+
+The time grid is split into segments of ``every`` levels. A segment runs the scheme
+(:func:`~vemwear.simulate.levels.run_levels`) on its mesh from its first level to its
+last, starting from the wear of its first level; at its last level the estimator
+(:func:`~vemwear.simulate.estimate.estimate`) marks cells for refinement (Dörfler's
+criterion) and, with a coarsening fraction, for coarsening
+(:func:`~vemwear.mesh.coarsen.coarsening_marking`); the mesh changes once (one level of
+refinement of the marked cells with the graded closure, one level of coarsening of the
+families all marked), the wear moves to the new contact nodes
+(:func:`~vemwear.contact.transfer.transfer_along_contact`: bitwise on kept nodes), the
+discretization and its factorization are built for the new mesh, and the next segment
+solves that level again on it. A segment owns its levels up to, not including, its
+last (the next segment's first); the last segment owns the final level too.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..contact.transfer import transfer_along_contact
+from ..mesh.adapt import CellTree, dorfler_marking, refine_tree
+from ..mesh.coarsen import coarsen_tree, coarsening_marking
+from ..mesh.polymesh import Mesh
+from .estimate import Estimate, estimate
+from .levels import run_levels
+from .loop import MemorySink, Result
+from .options import SolverOptions
+from .problem import Problem
+from .stream import LoopState, StoragePlan
+from .timegrid import TimeGrid
+
+__all__ = ["Segment", "simulate_adaptive"]
+
+
+@dataclass(frozen=True)
+class Segment:
+    """The levels of an adaptive run computed on one mesh.
+
+    Attributes
+    ----------
+    problem : Problem
+        The problem on this segment's mesh, its time grid cut after :attr:`last`.
+    first, last : int
+        The levels it computed; it owns ``first .. last - 1`` (``.. last`` for the final
+        segment).
+    result : Result
+        Its arrays; the rows of the levels before ``first`` are not computed (zero).
+    estimate : Estimate
+        The estimator at ``last``.
+    tree : CellTree
+        The levels and families of its cells.
+    """
+
+    problem: Problem
+    first: int
+    last: int
+    result: Result
+    estimate: Estimate
+    tree: CellTree
+
+
+def simulate_adaptive(
+    problem: Problem,
+    *,
+    every: int,
+    theta: float = 0.5,
+    coarsen: float = 0.0,
+    max_cells: int | None = None,
+    max_level: int | None = None,
+    max_difference: int = 1,
+    solver: SolverOptions | str = "newton",
+) -> list[Segment]:
+    """Run the scheme on a mesh that adapts every ``every`` levels (module docstring).
+
+    Parameters
+    ----------
+    problem : Problem
+        A 2D problem of order 1 on its initial mesh.
+    every : int
+        Levels between mesh changes (>= 1).
+    theta : float
+        Dörfler's bulk fraction of the refinement, in (0, 1].
+    coarsen : float
+        The fraction of eta^2 the coarsened cells may carry, in [0, 1); 0: no coarsening.
+    max_cells : int, optional
+        No refinement that would give more cells (coarsening still applies).
+    max_level : int, optional
+        Cells of this level are not refined further.
+    max_difference : int
+        Largest level difference of neighbours.
+    solver : SolverOptions or str
+        As for :func:`~vemwear.simulate.loop.simulate`.
+
+    Returns
+    -------
+    list of Segment
+    """
+    if not isinstance(problem.mesh, Mesh) or problem.order != 1:
+        raise ValueError("adaptive runs are implemented for k = 1 in 2D")
+    if int(every) < 1:
+        raise ValueError(f"[adapt] every must be at least 1 level, got {every}")
+    if not 0.0 <= coarsen < 1.0:
+        raise ValueError(f"[adapt] coarsen must lie in [0, 1), got {coarsen}")
+    if not 0.0 < theta <= 1.0:
+        raise ValueError(f"[adapt] theta must lie in (0, 1], got {theta}")
+    if coarsen >= 1.0 - theta + 1e-12 and coarsen > 0:
+        raise ValueError(
+            f"[adapt] coarsen = {coarsen} and theta = {theta} overlap: the cells to coarsen "
+            "would carry part of the bulk marked for refinement (need coarsen < 1 - theta)"
+        )
+    opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
+    t = problem.time.t
+    N = len(t) - 1
+    mesh: Mesh = problem.mesh
+    tree = CellTree.initial(mesh.n_cells)
+    parts = tuple(pc.part for pc in problem.parts)
+    w: NDArray[np.float64] | None = None
+    segments: list[Segment] = []
+    n0 = 0
+    while True:
+        n1 = min(n0 + int(every), N)
+        pr = dataclasses.replace(problem, mesh=mesh, time=TimeGrid(t[: n1 + 1]))
+        plan = StoragePlan.make(n1 + 1, np.arange(n0, n1 + 1))
+        sink = MemorySink(pr, plan, opts)
+        start = None if w is None else LoopState(n0, w)
+        run_levels(pr, opts, sink, plan, start=start, timings=sink.result.timings)
+        res = sink.result
+        res.completed = n1 + 1
+        est = estimate(pr, res.u[-1], res.p_rigid[-1], res.wear[-1], level=n1)
+        segments.append(Segment(pr, n0, n1, res, est, tree))
+        if n1 == N:
+            return segments
+        new, tree = _change(mesh, tree, est, theta, coarsen, max_cells, max_level, max_difference)
+        w = res.wear[-1]
+        if new is not mesh:
+            nxt = dataclasses.replace(problem, mesh=new)
+            w = transfer_along_contact(mesh, pr.contact.nodes, w, nxt.contact.points, parts)
+        pr.discrete.release_solvers()  # the old mesh's factorization
+        mesh, n0 = new, n1
+
+
+def _change(
+    mesh: Mesh,
+    tree: CellTree,
+    est: Estimate,
+    theta: float,
+    coarsen: float,
+    max_cells: int | None,
+    max_level: int | None,
+    max_difference: int,
+) -> tuple[Mesh, CellTree]:
+    """Coarsen, then refine, once: the new mesh and its tree."""
+    eta2 = est.indicators
+    refine = dorfler_marking(eta2, theta)
+    if max_level is not None:
+        refine = refine[tree.level[refine] < max_level]
+    owner = np.arange(mesh.n_cells)
+    if coarsen > 0:
+        spare = np.setdiff1d(coarsening_marking(eta2, coarsen), refine)
+        mesh, tree, owner = coarsen_tree(mesh, tree, spare, max_difference)
+    if refine.size:
+        new, tree2, _ = refine_tree(mesh, tree, owner[refine], max_difference)
+        if max_cells is None or new.n_cells <= max_cells:
+            return new, tree2
+    return mesh, tree
