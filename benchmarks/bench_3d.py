@@ -1,4 +1,4 @@
-"""Speed and memory of 3D contact with wear (issue 14, point 7).
+"""Speed and memory of 3D contact with wear.
 
 The 3D analogue of Section 5: Omega = (0, 2) x (0, 1) x (0, 1), clamped at x = 0,
 contact on z = 0, traction-free elsewhere, f1 = (0, 0, -0.06), v* = (1, 0, 0),

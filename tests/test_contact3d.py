@@ -1,4 +1,4 @@
-"""Contact with wear in 3D (issue 14, point 3): the solvers agree, a whole run on
+"""Contact with wear in 3D: the solvers agree, a whole run on
 tetrahedra equals an independent P1 computation with scikit-fem, the pushed block wears
 as its closed form, and prisms with rollers recover the 2D (plane strain) solution.
 """
@@ -18,7 +18,7 @@ from vemwear.mesh.voronoi3d import box_voronoi
 from vemwear.simulate import Prescribed, Problem, SolverOptions, TimeGrid, simulate
 from vemwear.vem import Material
 
-# the paper's data (Section 5), in 3D (issue 14, point 5)
+# the paper's data (Section 5), in 3D
 LAM, ETA = 4.0, 4.0
 C_P, G, MU, KAPPA = 0.4, 0.1, 0.2, 2.0
 PAPER_SIDES = {"clamped": "xmin", "contact": "zmin", "traction": ["xmax", "ymin", "ymax", "zmax"]}

@@ -1,4 +1,4 @@
-"""The front ends in 3D (issue 14, point 4): a 3D configuration through `vemwear check`
+"""The front ends in 3D: a 3D configuration through `vemwear check`
 and `vemwear run`, its files read back, a stopped run resumed bitwise, one-line errors
 for bad 3D inputs, the 2D side aliases, and `vemwear example 3d --quick`."""
 

@@ -1,4 +1,4 @@
-"""The 3D analogue of the paper's Section 5 (issue 14, point 5).
+"""The 3D analogue of the paper's Section 5.
 
 The block Omega = (0, 2) x (0, 1) x (0, 1), clamped at x = 0, in contact with the
 foundation on z = 0, traction-free elsewhere; f1 = (0, 0, -0.06), v* = (1, 0, 0),
