@@ -99,7 +99,7 @@ def study_client(
     if client is not None:
         yield client
         return
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler is not None:
         try:
@@ -116,37 +116,57 @@ def study_client(
     import dask
 
     n = workers or os.cpu_count() or 1
-    with contextlib.ExitStack() as stack:
-        stack.enter_context(dask.config.set(LOCAL_WORKERS))
+    # the settings stay for the cluster's life: a worker that dies is started again
+    with dask.config.set(LOCAL_WORKERS):
+        cluster = _start_local_cluster(n)
+        with cluster, Client(cluster) as own:
+            try:
+                # the workers import the library now, as part of the cluster's start; a
+                # worker that dies meanwhile is replaced by its nanny: register again
+                for attempt in range(_STARTS):
+                    try:
+                        _prepare_workers(own)
+                        break
+                    except OSError:
+                        if attempt + 1 == _STARTS:
+                            raise
+                _tell_dashboard(own, say)
+                yield own
+            except BaseException:
+                _forget([cluster])  # and closed below
+                raise
+
+
+def _start_local_cluster(n: int) -> Any:
+    """An embedded ``LocalCluster`` of ``n`` single-threaded worker processes on
+    127.0.0.1, started again if a worker dies while it starts."""
+    from distributed import LocalCluster
+
+    for attempt in range(_STARTS):
         before = set(_clusters())
         try:
-            cluster = stack.enter_context(
-                LocalCluster(
-                    n_workers=n,
-                    threads_per_worker=1,
-                    processes=True,
-                    host="127.0.0.1",
-                    dashboard_address="127.0.0.1:8787",
-                    silence_logs=logging.CRITICAL,  # a closing worker's heartbeat error is noise
-                )
+            return LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address="127.0.0.1:8787",
+                silence_logs=logging.CRITICAL,  # a closing worker's heartbeat error is noise
             )
         except BaseException as exc:  # interrupted, or a worker died, while starting
             _forget(set(_clusters()) - before)
-            if isinstance(exc, RuntimeError | OSError | TimeoutError):
+            if not isinstance(exc, RuntimeError | OSError | TimeoutError):
+                raise
+            if attempt + 1 == _STARTS:
                 raise StudyError(
                     f"the embedded Dask cluster did not start ({type(exc).__name__}: {exc}); "
                     "no run was started: start the sweep again"
                 ) from None
-            raise
-        try:
-            own = stack.enter_context(Client(cluster))
-            # the workers import the library now, as part of the cluster's start
-            _prepare_workers(own)
-            _tell_dashboard(own, say)
-            yield own
-        except BaseException:
-            _forget([cluster])  # and closed below
-            raise
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+#: Attempts to start the embedded cluster and prepare its workers (a worker may die).
+_STARTS = 3
 
 
 def _clusters() -> Any:
