@@ -37,6 +37,10 @@ def _study(tmp: Path, body: str, base: str | None = None, name: str = "study.tom
     return path
 
 
+def _json(path: Path) -> dict:
+    return json.loads(path.read_text())
+
+
 # ---------------------------------------------------------------------------- designs
 def test_grid_zip_and_ranges(tmp_path: Path) -> None:
     st = load_study(
@@ -155,6 +159,35 @@ def test_sweep_on_the_default_local_cluster(tmp_path: Path) -> None:
     assert sorted(p.name for p in (out / "runs").iterdir()) == sorted(ids)
     assert all((out / "configs" / f"{i}.toml").is_file() for i in ids)
     back.close()
+
+
+def test_the_warnings_of_runs_on_workers_reach_the_user(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A run whose explicit wear step overshoots warns on its worker as ``vemwear run``
+    does: the client says the warning with the run and its parameters, the run's record
+    keeps it, and a second execution (nothing to compute) does not say it again."""
+    from vemwear.studies import sweep
+
+    # kappa = 25: k kappa |v*| L_p = 1.25, in a layer too thick to be worn through
+    path = _study(
+        tmp_path, '[axes]\n"contact.kappa" = [25.0, 1.0]\n[overrides]\n"contact.g" = 10.0\n'
+    )
+    out = tmp_path / "out"
+    sweep(path, out, workers=1, progress=False, figures=False, say=None)
+    err = capsys.readouterr().err.splitlines()
+    said = [line for line in err if "warning:" in line]
+    assert len(said) == 1, err
+    recs = {r["params"]["contact.kappa"]: r for r in map(_json, (out / "log").glob("*.json"))}
+    assert said[0].startswith(
+        f"vemwear: run {recs[25.0]['id']} (contact.kappa = 25): warning: the explicit wear "
+        "update can overshoot: k kappa |v*| L_p = 1.25 "
+    ), said
+    assert recs[25.0]["status"] == "done" and recs[1.0]["status"] == "done"
+    assert recs[25.0]["warnings"] == [said[0].split("warning: ", 1)[1]]
+    assert recs[1.0]["warnings"] == []
+    sweep(path, out, workers=1, progress=False, figures=False, say=None)
+    assert "warning:" not in capsys.readouterr().err
 
 
 def test_a_failing_run_is_retried_then_recorded_and_the_others_go_on(tmp_path: Path) -> None:

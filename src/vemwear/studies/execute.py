@@ -99,7 +99,7 @@ def study_client(
     if client is not None:
         yield client
         return
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler is not None:
         try:
@@ -116,10 +116,36 @@ def study_client(
     import dask
 
     n = workers or os.cpu_count() or 1
-    with contextlib.ExitStack() as stack:
-        stack.enter_context(dask.config.set(LOCAL_WORKERS))
-        cluster = stack.enter_context(
-            LocalCluster(
+    # the settings stay for the cluster's life: a worker that dies is started again
+    with dask.config.set(LOCAL_WORKERS):
+        cluster = _start_local_cluster(n)
+        with cluster, Client(cluster) as own:
+            try:
+                # the workers import the library now, as part of the cluster's start; a
+                # worker that dies meanwhile is replaced by its nanny: register again
+                for attempt in range(_STARTS):
+                    try:
+                        _prepare_workers(own)
+                        break
+                    except OSError:
+                        if attempt + 1 == _STARTS:
+                            raise
+                _tell_dashboard(own, say)
+                yield own
+            except BaseException:
+                _forget([cluster])  # and closed below
+                raise
+
+
+def _start_local_cluster(n: int) -> Any:
+    """An embedded ``LocalCluster`` of ``n`` single-threaded worker processes on
+    127.0.0.1, started again if a worker dies while it starts."""
+    from distributed import LocalCluster
+
+    for attempt in range(_STARTS):
+        before = set(_clusters())
+        try:
+            return LocalCluster(
                 n_workers=n,
                 threads_per_worker=1,
                 processes=True,
@@ -127,12 +153,65 @@ def study_client(
                 dashboard_address="127.0.0.1:8787",
                 silence_logs=logging.CRITICAL,  # a closing worker's heartbeat error is noise
             )
-        )
-        own = stack.enter_context(Client(cluster))
-        # the workers import the library now, as part of the cluster's start
-        _prepare_workers(own)
-        _tell_dashboard(own, say)
-        yield own
+        except BaseException as exc:  # interrupted, or a worker died, while starting
+            _forget(set(_clusters()) - before)
+            if not isinstance(exc, RuntimeError | OSError | TimeoutError):
+                raise
+            if attempt + 1 == _STARTS:
+                raise StudyError(
+                    f"the embedded Dask cluster did not start ({type(exc).__name__}: {exc}); "
+                    "no run was started: start the sweep again"
+                ) from None
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+#: Attempts to start the embedded cluster and prepare its workers (a worker may die).
+_STARTS = 3
+
+
+def _clusters() -> Any:
+    """Dask's set of the clusters of this process (those its exit hook closes)."""
+    from distributed.deploy.spec import SpecCluster
+
+    return getattr(SpecCluster, "_instances", set())
+
+
+def _forget(clusters: Any) -> None:
+    """End the workers of clusters made here whose start or run was interrupted (Ctrl-C,
+    SIGTERM); Dask's exit hook no longer closes them (closing a cluster with a worker
+    that never started fails with a traceback after the command's last line)."""
+    clusters = list(clusters)
+    if clusters:
+        logging.getLogger("asyncio").addFilter(_closed_comms)
+    for cluster in clusters:
+        _kill_workers(cluster)
+        _clusters().discard(cluster)
+
+
+def _closed_comms(record: logging.LogRecord) -> bool:
+    """Drop asyncio's report of a message to a killed worker (``Future exception was
+    never retrieved ... CommClosedError``): those workers were ended on purpose."""
+    text = record.getMessage()
+    return not ("never retrieved" in text and "CommClosedError" in text)
+
+
+def _kill_workers(cluster: Any) -> None:
+    """End the worker processes of an embedded cluster at once (SIGKILL), before it is
+    closed after an error or a stop: a graceful close waits for the runs in progress
+    (seconds, or the workers' start), and a run stopped anywhere resumes from its
+    checkpoint."""
+    import signal
+
+    from distributed.core import Status
+
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        if getattr(nanny, "status", None) == Status.running:
+            nanny.status = Status.closing_gracefully  # it closes, not starts a new worker
+        process = getattr(getattr(nanny, "process", None), "process", None)
+        pid = getattr(process, "pid", None)
+        if isinstance(pid, int):
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
 
 
 def _tell_dashboard(client: Any, say: Callable[[str], None] | None) -> None:
@@ -253,8 +332,9 @@ def run_all(
 
     The runs go in tasks of ``chunk`` runs (default :func:`chunk_size` of the cluster's
     worker threads). Failed runs (after ``retries``) are recorded in ``out/log`` with
-    their error; the others go on. Ctrl-C cancels the tasks not yet started and
-    re-raises.
+    their error; the others go on. The warnings of the runs computed now are said
+    (``vemwear: run ID (params): warning: ...``) as their records come back. Ctrl-C
+    cancels the tasks not yet started and re-raises.
     """
     from distributed import as_completed
     from tqdm import tqdm
@@ -336,6 +416,10 @@ def run_all(
                 else:
                     ex.computed += bool(rec.get("executed"))
                     ex.skipped += not rec.get("executed")
+                if rec.get("executed"):  # runs of an earlier execution said theirs then
+                    for line in rec.get("warnings", []):
+                        said = f"vemwear: run {r.id} ({params_text(r.params)}): warning: {line}"
+                        bar.write(said, file=sys.stderr)
                 ex.records[r.id] = rec
             fut.release()
             advance([r.id for r in part])

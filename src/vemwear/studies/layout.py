@@ -14,7 +14,10 @@ The layout of a study's output directory ``OUTDIR``:
 
 The client (:mod:`~vemwear.studies.execute`) and the tasks on the workers
 (:mod:`~vemwear.studies.tasks`) both read and write it: the output directory must be on
-a file system every worker sees.
+a file system every worker sees. Temporaries of killed writes (``.NAME.tmp-XXXXXXXX``)
+are removed by the next execution: those of OUTDIR, ``configs`` and ``log`` when it
+takes OUTDIR's lock, those of a run's directory before the run is computed again
+(:func:`remove_temporaries`).
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from ..util.atomic import write_atomic
+from ..util.atomic import is_temporary, write_atomic
 
 __all__ = [
     "CONFIGS_DIR",
@@ -37,6 +40,7 @@ __all__ = [
     "open_study_dir",
     "read_record",
     "record_failure",
+    "remove_temporaries",
     "write_record",
 ]
 
@@ -79,6 +83,22 @@ def open_study_dir(
     return out
 
 
+def remove_temporaries(out: Path, *subdirs: str) -> list[Path]:
+    """Remove the temporaries of killed writes in ``out`` and its ``subdirs`` (their
+    writer is gone: the caller holds the directory's lock or found it free); return
+    them."""
+    found = [
+        p
+        for d in (out, *(out / s for s in subdirs))
+        if d.is_dir()
+        for p in d.iterdir()
+        if is_temporary(p.name) and p.is_file()
+    ]
+    for p in found:
+        p.unlink(missing_ok=True)
+    return found
+
+
 def is_complete(rundir: Path) -> bool:
     """Whether ``rundir`` holds the complete result of a run."""
     from ..runner.outdir import read_marker
@@ -97,8 +117,8 @@ def read_record(out: Path, rid: str) -> dict[str, Any] | None:
 
 
 def complete_record(out: Path, rid: str, params: dict[str, Any], executed: bool) -> dict:
-    """The record of a run whose directory holds a complete result (its wall time from
-    the logged record, if that is there)."""
+    """The record of a run whose directory holds a complete result (its wall time and
+    warnings from the logged record, if that is there)."""
     old = read_record(out, rid) or {}
     return {
         "id": rid,
@@ -107,6 +127,7 @@ def complete_record(out: Path, rid: str, params: dict[str, Any], executed: bool)
         "error": "",
         "wall_time": old.get("wall_time", float("nan")),
         "executed": executed,
+        "warnings": list(old.get("warnings", [])),
     }
 
 

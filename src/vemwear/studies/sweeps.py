@@ -78,11 +78,12 @@ def sweep(
     from ..runner.outdir import output_lock, read_marker, write_marker
     from .dataset import STUDY_NC, build_dataset, run_arrays, write_dataset
     from .execute import run_all, study_client
-    from .layout import open_study_dir
+    from .layout import CONFIGS_DIR, LOG_DIR, open_study_dir, remove_temporaries
 
     st = study if isinstance(study, Study) else load_study(study)
     outdir = open_study_dir(out, "sweep", protect=[st.path, st.base_path])
     with output_lock(outdir):
+        remove_temporaries(outdir, CONFIGS_DIR, LOG_DIR)  # of a killed execution
         if st.path is not None:
             from ..util.atomic import write_atomic
 

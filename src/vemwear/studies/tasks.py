@@ -7,7 +7,9 @@ run that raises is tried again once, then recorded as failed with its error; it 
 stops the others. A run whose directory holds a complete result is skipped, so a study
 stopped and started again only computes what is missing (also within a rescheduled
 chunk); a run stopped half-way resumes from its checkpoint. Each finished run is
-published on :data:`PROGRESS_TOPIC`, for the client's progress bar.
+published on :data:`PROGRESS_TOPIC`, for the client's progress bar. The warnings of a
+run (those ``vemwear run`` says, and Python warnings raised while it runs) are in its
+record, ``warnings``, and the client says them.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import contextlib
 import os
 import socket
 import time
+import warnings
 from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
@@ -28,6 +31,7 @@ from .layout import (
     complete_record,
     is_complete,
     record_failure,
+    remove_temporaries,
     write_record,
 )
 
@@ -52,23 +56,28 @@ def _wait_unlocked(rundir: Path) -> None:
         time.sleep(0.2)
 
 
-def _execute(config_path: Path, rundir: Path) -> Any:
+def _execute(config_path: Path, rundir: Path) -> tuple[Any, list[str]]:
     """One run of ``config_path`` into ``rundir`` by :func:`vemwear.runner.run_config`
     (the plan's refusals and the warnings as for ``vemwear run``): resumed from its
     checkpoint if a stopped attempt left one, else from the start. Returns the result
-    (None for a cycle-jump run, whose result is in its files)."""
+    (None for a cycle-jump run, whose result is in its files) and the run's warnings:
+    those ``vemwear run`` says, then the Python warnings raised meanwhile (each once)."""
     from ..runner import ResumeError, run_config
     from ..runner.checkpoint import CHECKPOINT_NAME
 
     outcome = None
-    if (rundir / CHECKPOINT_NAME).is_file():
-        with contextlib.suppress(ResumeError):
-            outcome = run_config(config_path, rundir, resume=True, progress=False)
-    if outcome is None:
-        outcome = run_config(config_path, rundir, force=True, progress=False)
+    # a worker runs one task at a time (one thread): the warnings caught are the run's
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("default")
+        if (rundir / CHECKPOINT_NAME).is_file():
+            with contextlib.suppress(ResumeError):
+                outcome = run_config(config_path, rundir, resume=True, progress=False)
+        if outcome is None:
+            outcome = run_config(config_path, rundir, force=True, progress=False)
+    said = [*outcome.warnings, *(f"{w.category.__name__}: {w.message}" for w in caught)]
     if outcome.result is None and outcome.cycles is None:  # result.h5 only
         raise RunFailed(outcome.note)
-    return outcome.result
+    return outcome.result, list(dict.fromkeys(said))
 
 
 #: What a task hands back besides the record: ``extract(result)``, e.g. the arrays the
@@ -86,8 +95,9 @@ def run_task(
     """Run one configuration into ``OUTDIR/runs/<rid>``.
 
     Returns the run's record (also written to ``OUTDIR/log/<rid>.json``), with
-    ``executed`` False if the directory already held a complete result, and, with
-    ``extract``, ``arrays = extract(result)`` (not logged).
+    ``executed`` False if the directory already held a complete result, ``warnings``
+    the run's warnings (a list of lines) and, with ``extract``, ``arrays =
+    extract(result)`` (not logged).
 
     Raises
     ------
@@ -110,14 +120,15 @@ def run_task(
     _wait_unlocked(rundir)
     if is_complete(rundir):
         return complete_record(out, rid, params, executed=False)
+    remove_temporaries(rundir)  # of a killed attempt: its lock is free
     try:
         if not config_path.is_file() or config_path.read_text(encoding="utf-8") != config_text:
             write_atomic(config_path, config_text)
-        result = _execute(config_path, rundir)
+        result, said = _execute(config_path, rundir)
     except Exception as exc:
         note = getattr(exc, "vemwear_note", "")
         raise RunFailed(f"{type(exc).__name__}: {exc}{note}") from None
-    rec.update(wall_time=time.perf_counter() - t0, executed=True)
+    rec.update(wall_time=time.perf_counter() - t0, executed=True, warnings=said)
     write_record(out, rec)
     if extract is not None and result is not None:
         rec["arrays"] = extract(result)
