@@ -116,6 +116,7 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
             ("vemwear.config.errors", "ConfigError"),
             ("vemwear.runner.outdir", "OutputDirError"),
             ("vemwear.runner.plan", "PlanError"),
+            ("vemwear.runner.entry", "LaunchError"),
             ("vemwear.mesh.polymesh", "MeshError"),
             ("vemwear.simulate.discrete", "DataError"),
         )
@@ -135,6 +136,13 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
         where = f" writing {exc.filename}" if exc.filename else ""
         return EXIT_INTERNAL, f"the disk is full{where}; free some space"
     return EXIT_INTERNAL, f"internal error: {type(exc).__name__}: {exc}"
+
+
+def _other_rank() -> bool:
+    """Whether this process is a rank other than 0 of an MPI job."""
+    from ..util.mpi import launched
+
+    return launched().rank > 0
 
 
 def _interrupted(exc: BaseException, debug: bool) -> int:
@@ -191,6 +199,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if stop_signal(exc) is not None:  # a library failing as it unwinds from the stop
             return _interrupted(exc, debug)
         code, msg = _exit_code(exc)
+        if code == EXIT_INPUT and _other_rank():  # every rank meets it: rank 0 says it
+            return code
         if debug:
             traceback.print_exception(exc)
         elif code == EXIT_INTERNAL:
