@@ -4,7 +4,8 @@ Real processes: ``mpirun -n N python -m vemwear run CONFIG -o OUT --backend pets
 against ``python -m vemwear run CONFIG -o OUT`` (the default backend), both read back
 from ``result.h5`` with h5py. These tests need Open MPI's ``mpirun`` and a Python in
 which petsc4py and mpi4py import (Debian's python3 with python3-petsc4py, or conda-forge;
-docs/mpi.md); ``.ci/run`` runs them with Debian's python3, elsewhere they are skipped.
+docs/mpi.md); ``.ci/run`` runs them with Debian's python3 (and makes a skip a failure
+there with ``VEMWEAR_MPI_TESTS=required``), elsewhere they are skipped.
 The refusals that need no PETSc run everywhere.
 """
 
@@ -13,8 +14,10 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 from functools import cache
 from pathlib import Path
 
@@ -71,10 +74,12 @@ def _petsc_here() -> bool:
 
 
 def _need_mpi() -> None:
+    # .ci/run sets VEMWEAR_MPI_TESTS=required where it installed PETSc: fail, not skip
+    missing = pytest.fail if os.environ.get("VEMWEAR_MPI_TESTS") == "required" else pytest.skip
     if MPIRUN is None:
-        pytest.skip("no mpirun: the MPI tests need Open MPI (docs/mpi.md)")
+        missing("no mpirun: the MPI tests need Open MPI (docs/mpi.md)")
     if not _petsc_here():
-        pytest.skip(
+        missing(
             f"petsc4py/mpi4py do not import in {sys.executable}: the MPI tests run with "
             "Debian's python3 and python3-petsc4py (.ci/run, docs/mpi.md)"
         )
@@ -203,3 +208,26 @@ def test_petsc_backend_without_petsc4py_names_the_way_to_get_it(tmp_path: Path) 
     assert done.returncode == 2, done.stdout + done.stderr
     assert "python3-petsc4py" in done.stderr and "conda-forge" in done.stderr
     assert not out.exists()
+
+
+def test_sigterm_to_mpirun_saves_the_finished_levels(serial, tmp_path: Path) -> None:
+    """mpirun forwards SIGTERM to every rank: rank 0 saves its finished levels (the
+    workers wait for it) and says how to resume."""
+    cfg = tmp_path / "long.toml"
+    cfg.write_text(CONFIG_2D.replace("steps = 40", "steps = 200000"))
+    out = tmp_path / "out"
+    cmd = _mpirun(2, *_vemwear(str(cfg), "-o", str(out), "--backend", "petsc"))
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_env())
+    deadline = time.monotonic() + 120
+    while not (out / "result.h5").exists() and time.monotonic() < deadline:
+        time.sleep(0.2)
+    time.sleep(2.0)  # some levels solved
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    text = err.decode()
+    assert "vemwear: terminated (SIGTERM); stopping" in text
+    assert "finished time levels (of 200001) are saved" in text and "--resume" in text
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["partial"] is True and summary["reason"] == "terminated (SIGTERM)"
+    assert 0 < summary["completed"] < 200001
+    assert (out / "checkpoint.npz").exists()

@@ -29,6 +29,7 @@ from __future__ import annotations
 import ctypes
 import glob
 import os
+import signal
 import sys
 import time
 from collections.abc import Iterator
@@ -175,6 +176,23 @@ class _Rank:
         self.busy = False
 
 
+_STOP_SIGNALS = {getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)}
+
+
+@contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold the stop signals (delivered when the section ends): a rank must not leave a
+    collective operation half done, or the ranks go out of step."""
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - not POSIX
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 @cache
 def _rank() -> _Rank:
     return _Rank()
@@ -222,9 +240,10 @@ class _Local:
 
 def _factorize(
     st: _Rank, fid: int, K: sp.csr_matrix | None = None, last: NDArray[np.int64] | None = None
-) -> NDArray[np.float64] | None:
-    """The collective factorization; returns the Schur complement on rank 0 (Fortran
-    order, lower triangle valid), None elsewhere."""
+) -> tuple[NDArray[np.float64], list[int]] | None:
+    """The collective factorization; returns on rank 0 the Schur complement (Fortran
+    order, lower triangle valid) and the megabytes of MUMPS's factorization on each
+    rank, None elsewhere."""
     PETSc, comm = st.PETSc, st.comm
     head = (K.shape[0], len(last)) if K is not None and last is not None else None
     n, c = comm.bcast(head, root=0)
@@ -264,12 +283,16 @@ def _factorize(
     if info < 0:
         raise _InStep(f"MUMPS failed: INFOG(1) = {info}, INFOG(2) = {F.getMumpsInfog(2)}")
     F.setMumpsIcntl(26, 0)  # solves: the interior system only (module docstring)
+    # MUMPS's INFO(22): the memory (MB) the factorization used on each rank
+    megabytes = comm.gather(int(F.getMumpsInfo(22)), root=0)
     loc.x, loc.b = A.createVecs()
     A.destroy()  # the solver keeps its own reference
     schur.destroy()
     loc.ksp, loc.F = ksp, F
     st.factors[fid] = loc
-    return _schur_block(lib, F, c, st.size) if st.rank == 0 else None
+    if st.rank != 0:
+        return None
+    return _schur_block(lib, F, c, st.size), megabytes
 
 
 def _schur_block(lib: Any, F: Any, c: int, size: int) -> NDArray[np.float64]:
@@ -315,8 +338,18 @@ def _solve(st: _Rank, fid: int, B: NDArray[np.float64] | None = None, k: int = 0
 
 def serve() -> None:
     """The loop of the ranks other than 0: take part in each command of rank 0 until it
-    sends ``stop`` (:func:`session` does when rank 0's work ends)."""
-    st = _rank()
+    sends ``stop`` (:func:`session` does when rank 0's work ends). The stop signals
+    that a launcher forwards to every rank are ignored here: rank 0 handles them (it
+    saves the finished levels) and then lets the workers go."""
+    old = {sig: signal.signal(sig, signal.SIG_IGN) for sig in _STOP_SIGNALS}
+    try:
+        _serve(_rank())
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+
+
+def _serve(st: _Rank) -> None:
     while True:
         op, args = st.comm.bcast(None, root=0)
         if op == "stop":
@@ -373,6 +406,9 @@ class PetscSchur:
 
     Made on rank 0 (the other ranks take part through :func:`serve`).
 
+    ``megabytes[r]`` is the memory MUMPS's factorization used on rank ``r`` (its
+    INFO(22)).
+
     Parameters
     ----------
     K : (n, n) sparse SPD matrix
@@ -402,10 +438,12 @@ class PetscSchur:
         self.timings["ordering"] = time.perf_counter() - tick
         tick = time.perf_counter()
         with st.command("factorize", self.fid):
-            S = _factorize(st, self.fid, K, last)
+            made = _factorize(st, self.fid, K, last)
         self.timings["factorization"] = time.perf_counter() - tick
         tick = time.perf_counter()
-        assert S is not None
+        assert made is not None
+        S, megabytes = made
+        self.megabytes: list[int] = megabytes
         self.S_inv = compliance_from_schur(S, overwrite_s=True)
         del S
         self.timings["schur"] = time.perf_counter() - tick
