@@ -231,3 +231,36 @@ def test_sigterm_to_mpirun_saves_the_finished_levels(serial, tmp_path: Path) -> 
     assert summary["partial"] is True and summary["reason"] == "terminated (SIGTERM)"
     assert 0 < summary["completed"] < 200001
     assert (out / "checkpoint.npz").exists()
+
+
+BACKEND_CHECK = """\
+import numpy as np
+from vemwear.paper import ex52
+from vemwear.solvers.backends import schur_factorize
+from vemwear.solvers.backends.petsc import PetscSchur, serve, session
+
+with session() as root:
+    if not root:
+        serve()
+    else:
+        s = ex52.problem(0.2, 2.0, divisions=(256, 128), steps=1).discrete.system
+        K, last = s.K, s.contact_dofs.ravel()
+        ref = schur_factorize(K, last, s.dof_points, "scipy")
+        got = PetscSchur(K, last)
+        B = np.random.default_rng(1).normal(size=(K.shape[0], 3))
+        X = got.solve(B)
+        print("S_inv", np.abs(got.S_inv - ref.S_inv).max() / np.abs(ref.S_inv).max())
+        print("solve", np.abs(X - ref.solve(B)).max() / np.abs(ref.solve(B)).max())
+"""
+
+
+def test_schur_block_and_solves_on_two_ranks_at_a_larger_size(tmp_path: Path) -> None:
+    """512 contact dofs: MUMPS's Schur block on two ranks has its lower triangle partly
+    filled with leftovers (not zero), so the triangle is told by a product with S."""
+    _need_mpi()
+    script = tmp_path / "check.py"
+    script.write_text(BACKEND_CHECK)
+    done = _run(_mpirun(2, sys.executable, str(script)))
+    assert done.returncode == 0, done.stdout + done.stderr
+    errors = dict(line.split() for line in done.stdout.splitlines())
+    assert float(errors["S_inv"]) < 1e-11 and float(errors["solve"]) < 1e-10, errors

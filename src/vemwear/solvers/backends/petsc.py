@@ -38,6 +38,7 @@ from functools import cache
 from typing import Any
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
@@ -162,18 +163,20 @@ class _Rank:
 
     @contextmanager
     def command(self, op: str, *args: Any) -> Iterator[None]:
-        """Rank 0: broadcast the command ``op`` to the workers, then do its part."""
+        """Rank 0: broadcast the command ``op`` to the workers, then do its part; a stop
+        signal (Ctrl-C, SIGTERM, SIGHUP) waits for the end of the command."""
         if self.busy:
             raise RuntimeError("the MPI ranks are out of step: a collective solve was interrupted")
-        if self.size > 1:
-            self.comm.bcast((op, args), root=0)
-        self.busy = True
-        try:
-            yield
-        except _InStep:
+        with _signals_held():
+            if self.size > 1:
+                self.comm.bcast((op, args), root=0)
+            self.busy = True
+            try:
+                yield
+            except _InStep:
+                self.busy = False
+                raise
             self.busy = False
-            raise
-        self.busy = False
 
 
 _STOP_SIGNALS = {getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)}
@@ -290,19 +293,27 @@ def _factorize(
     schur.destroy()
     loc.ksp, loc.F = ksp, F
     st.factors[fid] = loc
-    if st.rank != 0:
+    # one product S z by an interior solve tells which triangle of MUMPS's block holds S
+    z = np.cos(np.arange(c) + 0.5) if st.rank == 0 else np.zeros(0)
+    K_c = K[last] if K is not None and last is not None else None
+    Y = loc.interior(None if K_c is None else (K_c.T @ z)[:, None], 1)
+    if st.rank != 0 or K_c is None or Y is None or last is None:
         return None
-    return _schur_block(lib, F, c, st.size), megabytes
+    Sz = K_c[:, last] @ z - K_c @ Y[:, 0]  # K_cc z - K_ci K_ii^{-1} K_ic z
+    return _schur_block(lib, F, c, z, Sz), megabytes
 
 
-def _schur_block(lib: Any, F: Any, c: int, size: int) -> NDArray[np.float64]:
+def _schur_block(
+    lib: Any, F: Any, c: int, z: NDArray[np.float64], Sz: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """A copy of the dense Schur complement MUMPS left on rank 0, valid in its lower
     triangle.
 
-    With ICNTL(19) = 2 (PETSc's choice for a Cholesky factor) the block of one rank
-    holds S in its lower triangle (column-major), the upper one left over; that of
-    several ranks holds it in its upper triangle, the lower one zero (PETSc 3.18 with
-    MUMPS 5.5): it is transposed then.
+    With ICNTL(19) = 2 (PETSc's choice for a Cholesky factor) MUMPS fills one triangle
+    of the block: the lower one (column-major) on one rank, the upper one on several
+    (PETSc 3.18 with MUMPS 5.5), the other holding what was left there. The triangle
+    whose symmetric matrix gives the product ``Sz = S z``, computed by a solve, is
+    taken, transposed to the lower one.
     """
     S, status = ctypes.c_void_p(), ctypes.c_int()
     _check(
@@ -313,16 +324,37 @@ def _schur_block(lib: Any, F: Any, c: int, size: int) -> NDArray[np.float64]:
     lib.MatGetSize(S, ctypes.byref(rows), ctypes.byref(cols))
     lib.MatDenseGetLDA(S, ctypes.byref(lda))
     if (rows.value, cols.value) != (c, c):
-        raise _InStep(f"MUMPS returned a {rows.value} x {cols.value} Schur block, not {c} x {c}")
+        raise RuntimeError(
+            f"MUMPS returned a {rows.value} x {cols.value} Schur block, not {c} x {c}"
+        )
     ptr = ctypes.POINTER(ctypes.c_double)()
     _check(lib.MatDenseGetArrayRead(S, ctypes.byref(ptr)), "MatDenseGetArrayRead")
-    full = np.ctypeslib.as_array(ptr, shape=(lda.value * c,)) if c else np.zeros(0)
-    rows_of_s = full.reshape(c, lda.value)[:, :c]  # row j: column j of S
-    upper = size > 1 and not np.tril(rows_of_s.T, -1).any()
-    block = np.array(rows_of_s if upper else rows_of_s.T, order="F")
-    lib.MatDenseRestoreArrayRead(S, ctypes.byref(ptr))
-    lib.MatFactorRestoreSchurComplement(F.handle, ctypes.byref(S), status.value)
-    return block
+    try:
+        full = np.ctypeslib.as_array(ptr, shape=(lda.value * c,)) if c else np.zeros(0)
+        M = full.reshape(c, lda.value)[:, :c].T  # the block, a Fortran-ordered view
+        errors = [_symmetric_error(M, z, Sz, lower) for lower in (True, False)]
+        lower = errors[0] <= errors[1]
+        if min(errors) > 1e-8:
+            raise RuntimeError(
+                f"neither triangle of MUMPS's Schur block is the Schur complement "
+                f"(relative errors {errors[0]:.1e}, {errors[1]:.1e} of S z)"
+            )
+        return np.array(M if lower else M.T, order="F")
+    finally:
+        lib.MatDenseRestoreArrayRead(S, ctypes.byref(ptr))
+        lib.MatFactorRestoreSchurComplement(F.handle, ctypes.byref(S), status.value)
+
+
+def _symmetric_error(
+    M: NDArray[np.float64], z: NDArray[np.float64], Sz: NDArray[np.float64], lower: bool
+) -> float:
+    """``|A z - Sz| / |Sz|`` for the symmetric ``A`` of one triangle of ``M``
+    (triangular products: no c x c temporary)."""
+    if len(z) == 0:
+        return 0.0
+    (trmv,) = sla.get_blas_funcs(("trmv",), (M,))
+    Az = trmv(M, z, lower=lower) + trmv(M, z, lower=lower, trans=1) - np.diag(M) * z
+    return float(np.linalg.norm(Az - Sz)) / max(float(np.linalg.norm(Sz)), 1e-300)
 
 
 def _solve(st: _Rank, fid: int, B: NDArray[np.float64] | None = None, k: int = 0) -> Any:
