@@ -226,7 +226,8 @@ def test_sigterm_to_mpirun_saves_the_finished_levels(serial, tmp_path: Path) -> 
     _, err = proc.communicate(timeout=120)
     text = err.decode()
     assert "vemwear: terminated (SIGTERM); stopping" in text
-    assert "finished time levels (of 200001) are saved" in text and "--resume" in text
+    assert "finished time levels (of 200001) are saved" in text
+    assert "continue with: mpirun -n 2 vemwear run" in text and "--resume --backend petsc" in text
     summary = json.loads((out / "summary.json").read_text())
     assert summary["partial"] is True and summary["reason"] == "terminated (SIGTERM)"
     assert 0 < summary["completed"] < 200001

@@ -273,7 +273,14 @@ def _run_config(
         check_estimate(est, out, str(config), have=have)
     try:
         plan = prepare_run(
-            cfg, Path(config), out, options, force=force, resume=resume, solver_flag=solver
+            cfg,
+            Path(config),
+            out,
+            options,
+            force=force,
+            resume=resume,
+            solver_flag=solver,
+            backend_flag=backend,
         )
     except RunComplete as done:
         outcome.note = str(done)
