@@ -265,3 +265,19 @@ def test_schur_block_and_solves_on_two_ranks_at_a_larger_size(tmp_path: Path) ->
     assert done.returncode == 0, done.stdout + done.stderr
     errors = dict(line.split() for line in done.stdout.splitlines())
     assert float(errors["S_inv"]) < 1e-11 and float(errors["solve"]) < 1e-10, errors
+
+
+def test_other_commands_under_mpirun_are_refused(tmp_path: Path) -> None:
+    if MPIRUN is None:
+        pytest.skip("no mpirun: the MPI tests need Open MPI (docs/mpi.md)")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(CONFIG_2D)
+    cmd = _mpirun(2, sys.executable, "-m", "vemwear", "check", str(cfg))
+    done = _run(cmd, timeout=120)
+    assert done.returncode == 2, done.stdout + done.stderr
+    lines = [ln for ln in done.stderr.splitlines() if ln.startswith("vemwear: error:")]
+    assert lines == [
+        "vemwear: error: started as 2 MPI ranks: only `vemwear run` (with the petsc backend) "
+        "runs on several ranks; run this command without mpirun"
+    ]
+    assert "valid" not in done.stdout

@@ -138,6 +138,22 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
     return EXIT_INTERNAL, f"internal error: {type(exc).__name__}: {exc}"
 
 
+def _refused_under_mpi(func: Callable[[argparse.Namespace], int]) -> int | None:
+    """Exit code 2 for a command other than ``run`` started by an MPI launcher on
+    several ranks (it would run once per rank), said by rank 0; None otherwise."""
+    from ..util.mpi import launched
+
+    job = launched()
+    if job.size == 1 or func is run_cmd.cmd_run:
+        return None
+    if job.rank == 0:
+        say(
+            f"{PROG}: error: started as {job.size} MPI ranks: only `vemwear run` (with the "
+            "petsc backend) runs on several ranks; run this command without mpirun"
+        )
+    return EXIT_INPUT
+
+
 def _other_rank() -> bool:
     """Whether this process is a rank other than 0 of an MPI job."""
     from ..util.mpi import launched
@@ -175,6 +191,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return code if isinstance(code, int) else (EXIT_OK if code is None else EXIT_INPUT)
     debug = bool(getattr(args, "debug", False))
     func: Callable[[argparse.Namespace], int] = args.func
+    refused = _refused_under_mpi(func)
+    if refused is not None:
+        return refused
     from ..util.heap import keep_freed_memory
 
     keep_freed_memory()  # steady run times: no page faults for every new array
