@@ -183,6 +183,24 @@ def _stats(v: list[float]) -> str:
     return f"{min(v):8.3f} {statistics.median(v):8.3f} {max(v):8.3f}"
 
 
+def _tables(times: dict, last: dict) -> None:
+    print("Time per phase [s] (solve: ms per right-hand side), min / median / max")
+    head = "".join(f" {p + ': min median max':>29}" for p in PHASES)
+    print(f"{'case':<8} {'unknowns':>9} {'contact':>7} {'path':<15}{head}")
+    for (case, name), ph in times.items():
+        row = last[(case, name)]
+        cells = "".join(f" {_stats(ph[p]):>29}" for p in PHASES)
+        print(f"{case:<8} {row['n']:9d} {row['c']:7d} {name:<15}{cells}")
+    print("Memory per rank [MB] (last round): peak resident | MUMPS INFO(22)")
+    for (case, name), row in last.items():
+        peaks = " ".join(f"{m:7.0f}" for m in row["peak MB"])
+        mumps = " ".join(f"{m:7d}" for m in row["MUMPS MB"]) or "-"
+        print(
+            f"{case:<8} {name:<15} peak {peaks} | MUMPS {mumps}  (residual {row['residual']:.1e})"
+        )
+    sys.stdout.flush()
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -219,21 +237,8 @@ def main(argv: list[str] | None = None) -> int:
                 for p in PHASES:
                     times[(case, name)][p].append(row[p])
                 last[(case, name)] = row
-        print(f"round {r + 1} of {a.repeat} done", file=sys.stderr, flush=True)
-    print("\nTime per phase [s] (solve: ms per right-hand side), min / median / max")
-    head = "".join(f" {p + ': min median max':>29}" for p in PHASES)
-    print(f"{'case':<8} {'unknowns':>9} {'contact':>7} {'path':<15}{head}")
-    for (case, name), ph in times.items():
-        row = last[(case, name)]
-        cells = "".join(f" {_stats(ph[p]):>29}" for p in PHASES)
-        print(f"{case:<8} {row['n']:9d} {row['c']:7d} {name:<15}{cells}")
-    print("\nMemory per rank [MB] (last round): peak resident | MUMPS INFO(22)")
-    for (case, name), row in last.items():
-        peaks = " ".join(f"{m:7.0f}" for m in row["peak MB"])
-        mumps = " ".join(f"{m:7d}" for m in row["MUMPS MB"]) or "-"
-        print(
-            f"{case:<8} {name:<15} peak {peaks} | MUMPS {mumps}  (residual {row['residual']:.1e})"
-        )
+        print(f"\n== after round {r + 1} of {a.repeat}", flush=True)
+        _tables(times, last)
     return 0
 
 
