@@ -264,7 +264,7 @@ def test_schur_block_and_solves_on_two_ranks_at_a_larger_size(tmp_path: Path) ->
     done = _run(_mpirun(2, sys.executable, str(script)))
     assert done.returncode == 0, done.stdout + done.stderr
     errors = dict(line.split() for line in done.stdout.splitlines())
-    assert float(errors["S_inv"]) < 1e-11 and float(errors["solve"]) < 1e-10, errors
+    assert float(errors["S_inv"]) < RTOL and float(errors["solve"]) < RTOL, errors
 
 
 def test_other_commands_under_mpirun_are_refused(tmp_path: Path) -> None:
