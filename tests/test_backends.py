@@ -181,7 +181,8 @@ def test_forced_scipy_fallback_runs_the_condensed_solver(small_problem, no_pardi
 
 
 def test_backend_names_are_consistent():
-    assert set(backends.PREFERENCE) | {"auto"} == set(BACKENDS)
+    assert set(backends.PREFERENCE) | set(backends.ON_REQUEST) | {"auto"} == set(BACKENDS)
+    assert not set(backends.PREFERENCE) & set(backends.ON_REQUEST)
     assert set(INSTALLED) <= set(backends.PREFERENCE)
 
 

@@ -116,6 +116,7 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
             ("vemwear.config.errors", "ConfigError"),
             ("vemwear.runner.outdir", "OutputDirError"),
             ("vemwear.runner.plan", "PlanError"),
+            ("vemwear.runner.entry", "LaunchError"),
             ("vemwear.mesh.polymesh", "MeshError"),
             ("vemwear.simulate.discrete", "DataError"),
         )
@@ -135,6 +136,29 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
         where = f" writing {exc.filename}" if exc.filename else ""
         return EXIT_INTERNAL, f"the disk is full{where}; free some space"
     return EXIT_INTERNAL, f"internal error: {type(exc).__name__}: {exc}"
+
+
+def _refused_under_mpi(func: Callable[[argparse.Namespace], int]) -> int | None:
+    """Exit code 2 for a command other than ``run`` started by an MPI launcher on
+    several ranks (it would run once per rank), said by rank 0; None otherwise."""
+    from ..util.mpi import launched
+
+    job = launched()
+    if job.size == 1 or func is run_cmd.cmd_run:
+        return None
+    if job.rank == 0:
+        say(
+            f"{PROG}: error: started as {job.size} MPI ranks: only `vemwear run` (with the "
+            "petsc backend) runs on several ranks; run this command without mpirun"
+        )
+    return EXIT_INPUT
+
+
+def _other_rank() -> bool:
+    """Whether this process is a rank other than 0 of an MPI job."""
+    from ..util.mpi import launched
+
+    return launched().rank > 0
 
 
 def _interrupted(exc: BaseException, debug: bool) -> int:
@@ -167,6 +191,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return code if isinstance(code, int) else (EXIT_OK if code is None else EXIT_INPUT)
     debug = bool(getattr(args, "debug", False))
     func: Callable[[argparse.Namespace], int] = args.func
+    refused = _refused_under_mpi(func)
+    if refused is not None:
+        return refused
     from ..util.heap import keep_freed_memory
 
     keep_freed_memory()  # steady run times: no page faults for every new array
@@ -191,6 +218,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if stop_signal(exc) is not None:  # a library failing as it unwinds from the stop
             return _interrupted(exc, debug)
         code, msg = _exit_code(exc)
+        if code == EXIT_INPUT and _other_rank():  # every rank meets it: rank 0 says it
+            return code
         if debug:
             traceback.print_exception(exc)
         elif code == EXIT_INTERNAL:

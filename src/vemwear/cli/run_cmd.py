@@ -40,6 +40,14 @@ def setup_run(p: argparse.ArgumentParser) -> None:
     add_common_options(p, solve=True)
     _force_size(p)
     p.add_argument(
+        "--backend",
+        choices=_backends(),
+        metavar="NAME",
+        help="sparse direct solver, overriding the configuration: "
+        + " | ".join(_backends())
+        + " (petsc: MUMPS over the ranks of `mpirun -n N vemwear run ...`, docs/mpi.md)",
+    )
+    p.add_argument(
         "--resume",
         action="store_true",
         help="continue a stopped or killed run from its last checkpoint in OUTDIR "
@@ -47,6 +55,12 @@ def setup_run(p: argparse.ArgumentParser) -> None:
         "solver options may change); the result is the one of an uninterrupted run",
     )
     p.set_defaults(func=cmd_run)
+
+
+def _backends() -> tuple[str, ...]:
+    from ..solvers import BACKENDS
+
+    return tuple(BACKENDS)
 
 
 def _force_size(p: argparse.ArgumentParser) -> None:
@@ -83,10 +97,13 @@ def cmd_run(args: argparse.Namespace) -> int:
         force=args.force,
         progress=not args.no_progress,
         solver=args.solver,
+        backend=args.backend,
         force_size=args.force_size,
         say=lambda line: print(f"{PROG}: {line}", flush=True),
         warn=lambda line: say(f"{PROG}: {line}"),
     )
+    if outcome.rank != 0:  # an MPI rank that served rank 0's solves: rank 0 reports
+        return EXIT_OK
     title, result, cres = outcome.title, outcome.result, outcome.cycles
     if result is None and cres is None:  # complete already, or result.h5 alone
         if outcome.config is None or (

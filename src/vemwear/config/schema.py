@@ -375,7 +375,8 @@ class Solver(Section):
     )
     backend: Literal[BACKENDS] = Field(  # type: ignore[valid-type]
         library_default(SolverOptions, "backend"),
-        description="sparse direct solver ('auto': PARDISO if pypardiso is installed, else SciPy)",
+        description="sparse direct solver ('auto': PARDISO if pypardiso is installed, else "
+        "SciPy; 'petsc': MUMPS over the ranks of an MPI job, docs/mpi.md)",
     )
 
 

@@ -32,7 +32,12 @@ if TYPE_CHECKING:
     from ..simulate import Result, SolverOptions
     from ..simulate.cycles import CycleResult
 
-__all__ = ["RunOutcome", "overshoot_lines", "run_config"]
+__all__ = ["LaunchError", "RunOutcome", "overshoot_lines", "run_config"]
+
+
+class LaunchError(ValueError):
+    """A run started in a way that cannot work (several MPI ranks without the petsc
+    backend, an option that does not go with the configuration): invalid input."""
 
 
 @dataclass
@@ -60,6 +65,9 @@ class RunOutcome:
         Wall time.
     config : Config or None
         The validated configuration.
+    rank : int
+        This process's rank in an MPI job (0 outside one); on the other ranks, which
+        only took part in rank 0's linear algebra, nothing else is set.
     """
 
     title: str
@@ -71,15 +79,40 @@ class RunOutcome:
     warnings: list[str] = field(default_factory=list)
     seconds: float = 0.0
     config: Config | None = None
+    rank: int = 0
 
 
-def _solver_options(base: SolverOptions, method: str | None) -> SolverOptions:
+def _solver_options(
+    base: SolverOptions, method: str | None, backend: str | None = None
+) -> SolverOptions:
     from ..simulate import SolverOptions
+    from ..solvers import resolve_backend
 
-    if method is None or method == base.method:
-        return base
-    # keep tol and backend; iteration limits of different methods are not comparable
-    return SolverOptions(method=method, tol=base.tol, max_iter=None, backend=base.backend)
+    chosen = base.backend if backend is None else backend
+    try:
+        resolve_backend(chosen)
+        if method is None or method == base.method:
+            if chosen == base.backend:
+                return base
+            return SolverOptions(base.method, base.tol, base.max_iter, chosen)
+        # keep tol; iteration limits of different methods are not comparable
+        return SolverOptions(method=method, tol=base.tol, max_iter=None, backend=chosen)
+    except ValueError as exc:
+        raise LaunchError(str(exc)) from None
+
+
+def _config_backend(config: str | os.PathLike[str]) -> str | None:
+    """``[solver] backend`` of a configuration file read as plain TOML ("auto" when
+    absent), None when the file cannot be read (its run reports why)."""
+    import tomllib
+
+    try:
+        with open(config, "rb") as f:
+            solver = tomllib.load(f).get("solver", {})
+    except (OSError, ValueError):
+        return None
+    backend = solver.get("backend", "auto") if isinstance(solver, dict) else None
+    return backend if isinstance(backend, str) else None
 
 
 def _resumed_bytes(outdir: Path) -> int:
@@ -101,6 +134,7 @@ def run_config(
     force: bool = False,
     progress: bool = True,
     solver: str | None = None,
+    backend: str | None = None,
     force_size: bool = False,
     say: Callable[[str], None] | None = None,
     warn: Callable[[str], None] | None = None,
@@ -121,6 +155,12 @@ def run_config(
         Show a progress bar.
     solver : str, optional
         Another solver method than the configuration's.
+    backend : str, optional
+        Another sparse backend than the configuration's. Under an MPI launcher
+        (``mpirun -n N``, N > 1) the backend must be ``"petsc"``: every rank calls
+        ``run_config``, rank 0 runs the simulation and writes ``outdir``, the other
+        ranks take part in its factorization and solves and return an outcome with
+        only ``rank`` set (docs/mpi.md).
     force_size : bool
         Run even if the estimated memory or disk exceeds what is available.
     say : callable, optional
@@ -137,6 +177,9 @@ def run_config(
     ------
     ConfigError, PlanError, OutputDirError, ResumeError
         A refused run (invalid input), before any solving.
+    LaunchError
+        Several MPI ranks without the petsc backend, or a backend that is not installed
+        or does not go with the solver method.
     ConvergenceError, WornThroughError, KeyboardInterrupt
         A run that stopped; its finished levels are saved (``exc.vemwear_note``).
 
@@ -157,6 +200,46 @@ def run_config(
     >>> len(outcome.result.t), sorted(p.name for p in outcome.out.glob("*.npz"))
     (5, ['result.npz'])
     """
+    from ..util.mpi import launched
+
+    job = launched()
+    kw: dict[str, Any] = dict(resume=resume, force=force, progress=progress, solver=solver)
+    kw.update(backend=backend, force_size=force_size, say=say, warn=warn)
+    if job.size == 1:
+        return _run_config(config, outdir, **kw)
+    requested = backend or _config_backend(config)
+    if requested not in (None, "petsc"):
+        raise LaunchError(
+            f"started as {job.size} MPI ranks, but the solver backend is {requested!r}: "
+            "only the petsc backend runs one simulation on several ranks (--backend petsc "
+            'or [solver] backend = "petsc"); without it, run vemwear without mpirun'
+        )
+    from ..solvers.backends.petsc import HINT, available, serve, session
+
+    if not available():
+        raise LaunchError(f"backend petsc: {HINT}")
+    with session() as root:
+        if not root:
+            serve()
+            return RunOutcome("", Path(outdir).expanduser().absolute(), rank=job.rank)
+        return _run_config(config, outdir, **kw)
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _run_config(
+    config: str | os.PathLike[str],
+    outdir: str | os.PathLike[str],
+    *,
+    resume: bool,
+    force: bool,
+    progress: bool,
+    solver: str | None,
+    backend: str | None,
+    force_size: bool,
+    say: Callable[[str], None] | None,
+    warn: Callable[[str], None] | None,
+) -> RunOutcome:
+    """:func:`run_config` on one process (rank 0 of an MPI job)."""
     from ..config import load_config
     from .describe import smallness_report
     from .outdir import refuse_locked, stale_temporaries
@@ -172,7 +255,7 @@ def run_config(
     # on --resume, the disk that result.h5 takes already is not asked for again
     have = _resumed_bytes(out) if resume else 0
     cfg = load_config(config, admit=admit_sizes(out, force_size=force_size, have=have))
-    options = _solver_options(cfg.solver, solver)
+    options = _solver_options(cfg.solver, solver, backend)
     if cfg.cycles is not None and resume:
         raise ResumeError(
             "--resume: a run with [time] cycle_jump is not checkpointed; run it again"
@@ -191,7 +274,14 @@ def run_config(
         check_estimate(est, out, str(config), have=have)
     try:
         plan = prepare_run(
-            cfg, Path(config), out, options, force=force, resume=resume, solver_flag=solver
+            cfg,
+            Path(config),
+            out,
+            options,
+            force=force,
+            resume=resume,
+            solver_flag=solver,
+            backend_flag=backend,
         )
     except RunComplete as done:
         outcome.note = str(done)

@@ -222,10 +222,19 @@ def _release_lock(plan: RunPlan) -> None:
     plan.locked = False
 
 
-def _resume_command(config_path: str | Path, out: Path, solver_flag: str | None) -> str:
-    cmd = ["vemwear", "run", str(Path(config_path).resolve()), "-o", str(out), "--resume"]
+def _resume_command(
+    config_path: str | Path, out: Path, solver_flag: str | None, backend_flag: str | None = None
+) -> str:
+    """The command that resumes the run (under ``mpirun -n N`` for a run of N ranks)."""
+    from ..util.mpi import launched
+
+    ranks = launched().size
+    cmd = ["mpirun", "-n", str(ranks)] if ranks > 1 else []
+    cmd += ["vemwear", "run", str(Path(config_path).resolve()), "-o", str(out), "--resume"]
     if solver_flag:
         cmd += ["--solver", solver_flag]
+    if backend_flag:
+        cmd += ["--backend", backend_flag]
     return " ".join(shlex.quote(c) for c in cmd)
 
 
@@ -242,6 +251,7 @@ def prepare_run(
     force: bool = False,
     resume: bool = False,
     solver_flag: str | None = None,
+    backend_flag: str | None = None,
     need_bytes: int = 0,
 ) -> RunPlan:
     """Everything a run checks before solving: the output directory and the checkpoint.
@@ -276,7 +286,7 @@ def prepare_run(
         solver=solver,
         storage=storage,
         meta=meta,
-        command=_resume_command(config_path, outdir, solver_flag),
+        command=_resume_command(config_path, outdir, solver_flag, backend_flag),
     )
     refuse_locked(outdir)
     marker = read_marker(outdir) if outdir.is_dir() else None

@@ -25,8 +25,9 @@ class SolverOptions:
         Bound on the scaled KKT residuals of every step.
     max_iter : int or None
         Iteration limit per step (default: 100 for Newton, 200000 for Uzawa).
-    backend : {"auto", "scipy", "pardiso"}
-        Sparse direct solver.
+    backend : {"auto", "scipy", "pardiso", "petsc"}
+        Sparse direct solver (``petsc``: MUMPS over the ranks of an MPI job, for the
+        condensed ``newton`` only).
     """
 
     method: str = "newton"
@@ -38,6 +39,11 @@ class SolverOptions:
         if self.method not in SOLVERS:
             raise ValueError(
                 f"solver: unknown method {self.method!r}; expected one of {list(SOLVERS)}"
+            )
+        if self.backend == "petsc" and self.method != "newton":
+            raise ValueError(
+                f"solver: the petsc backend runs the condensed method 'newton' only, not "
+                f"{self.method!r}"
             )
         if not (self.tol > 0):
             raise ValueError(f"solver: tol must be positive, got {self.tol}")

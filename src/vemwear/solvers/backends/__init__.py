@@ -5,9 +5,12 @@ name      Schur complement on the contact dofs                        installed 
 ========  ==========================================================  ==============
 pardiso   MKL PARDISO, partial Cholesky factorization (iparm[35])     ``pypardiso``
 scipy     SciPy's SuperLU, trailing block of the full LU factors      always
+petsc     MUMPS through PETSc, on the ranks of an MPI job (ICNTL(19))  ``petsc4py``
 ========  ==========================================================  ==============
 
-``"auto"`` picks the first installed backend of :data:`PREFERENCE`. A new backend
+``"auto"`` picks the first installed backend of :data:`PREFERENCE`; ``"petsc"`` is
+only used when asked for (``mpirun -n N vemwear run ... --backend petsc``: docs/mpi.md),
+and only for the Schur factorization of the condensed scheme. A new backend
 (MUMPS through a binding that imports with the installed NumPy, for one; its Schur
 output, ICNTL(19), is valid in the lower triangle only, which
 :func:`.base.compliance_from_schur` already reads) is one module with a
@@ -29,18 +32,25 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from .base import Factorization, SchurFactorization, compliance_from_schur
+from .petsc import HINT as _PETSC_HINT
 
-BACKENDS = ("auto", "scipy", "pardiso")
+BACKENDS = ("auto", "scipy", "pardiso", "petsc")
 
 #: Installed backends are tried in this order by ``"auto"``.
 PREFERENCE = ("pardiso", "scipy")
+
+#: Backends used only when asked for (MUMPS over the ranks of an MPI job).
+ON_REQUEST = ("petsc",)
 
 #: Below this many unknowns SuperLU factorizes about as fast as PARDISO; the
 #: full-space Newton path (a new factorization per iteration) uses PARDISO above it.
 PARDISO_MIN_SIZE = 20_000
 
-_MODULES = {"scipy": ".superlu", "pardiso": ".pardiso"}
-_HINT = {"pardiso": "pip install 'vemwear[fast]' (needs MKL wheels: Linux or Windows x86_64)"}
+_MODULES = {"scipy": ".superlu", "pardiso": ".pardiso", "petsc": ".petsc"}
+_HINT = {
+    "pardiso": "pip install 'vemwear[fast]' (needs MKL wheels: Linux or Windows x86_64)",
+    "petsc": _PETSC_HINT,
+}
 
 
 def _module(name: str) -> Any:
@@ -99,6 +109,11 @@ def factorize(
     (see :func:`resolve_backend`).
     """
     chosen = resolve_backend(backend, A.shape[0], many_factorizations)
+    if chosen == "petsc":
+        raise ValueError(
+            "backend 'petsc' makes the Schur factorization of the condensed Newton "
+            "(method 'newton') only"
+        )
     with _failures(chosen):
         if chosen == "pardiso":
             return _module("pardiso").PardisoFactor(A, spd=symmetric)
@@ -168,6 +183,8 @@ def schur_factorize(
     with _failures(chosen):
         if chosen == "pardiso":
             factor: SchurFactorization = _module("pardiso").PardisoSchur(K, last, points)
+        elif chosen == "petsc":
+            factor = _module("petsc").PetscSchur(K, last, points)
         else:
             factor = _module("scipy").SuperLUSchur(K, last, points)
     if _KEEP:
@@ -193,6 +210,7 @@ def _failures(backend: str) -> Iterator[None]:
 
 __all__ = [
     "BACKENDS",
+    "ON_REQUEST",
     "PARDISO_MIN_SIZE",
     "PREFERENCE",
     "Factorization",

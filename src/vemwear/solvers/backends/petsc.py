@@ -1,0 +1,509 @@
+"""MUMPS through PETSc (petsc4py), on one MPI rank or several.
+
+Under ``mpirun -n N`` rank 0 runs the simulation (assembly, the level loop, the
+outputs) and the other ranks serve its collective linear algebra (:func:`serve`,
+inside :func:`session`): each command starts with a broadcast from rank 0, so that
+every rank takes part in the same factorization and the same solves.
+
+Factorization (:class:`PetscSchur`): rank 0 holds the assembled stiffness and sends
+each rank its block of rows (PETSc's default split of the rows in contiguous blocks);
+PETSc gives the distributed matrix to MUMPS (Cholesky of an SPD matrix) with the
+contact dofs as MUMPS's Schur variables (``MatFactorSetSchurIS``, MUMPS's ICNTL(19)):
+MUMPS factorizes the interior block over all ranks and leaves the dense Schur
+complement ``S = K_cc - K_ci K_ii^{-1} K_ic`` on rank 0, valid in its lower triangle,
+which :func:`.base.compliance_from_schur` inverts as for PARDISO. petsc4py 3.18 does
+not wrap ``MatFactorSetSchurIS`` and ``MatFactorGetSchurComplement``; they are called
+through ctypes in the PETSc library that petsc4py loaded.
+
+Solves: PETSc 3.18 refuses MUMPS's Schur reduction and expansion on more than one
+rank ("Parallel Schur complements not yet supported from PETSc"). With MUMPS's
+ICNTL(26) = 0 a solve gives the interior solution ``K_ii^{-1} b_i`` (the Schur entries
+set to zero) on any number of ranks, and ``K^{-1} b`` follows by block elimination on
+rank 0, two interior solves per right-hand side::
+
+    x_c = S^{-1} (b_c - K_ci K_ii^{-1} b_i),    x_i = K_ii^{-1} (b_i - K_ic x_c)
+"""
+
+from __future__ import annotations
+
+import ctypes
+import glob
+import os
+import signal
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from functools import cache
+from typing import Any
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from ...util.arrays import unique as _unique
+from .base import compliance_from_schur
+
+__all__ = ["HINT", "PetscSchur", "available", "serve", "session"]
+
+#: How to get petsc4py, said when it cannot be imported.
+HINT = (
+    "petsc4py and mpi4py are not importable: on Debian or Ubuntu, `apt-get install "
+    "python3-petsc4py python3-mpi4py openmpi-bin` and run vemwear with Debian's python3 "
+    "(a venv made with --system-site-packages, NumPy < 2); with conda, `conda install -c "
+    "conda-forge petsc4py mpi4py`; see docs/mpi.md"
+)
+
+#: Where Debian's python3-petsc4py-real* puts petsc4py (its .pth file only finds it
+#: through PETSC_DIR or a `petsc` alternative that the package does not set)
+_DEBIAN = "/usr/lib/petscdir/petsc*/*-real/lib/python3/dist-packages"
+
+
+@cache
+def _modules() -> tuple[Any, Any]:
+    """petsc4py's ``PETSc`` and mpi4py's ``MPI``, initialized once."""
+    import importlib.util
+
+    if importlib.util.find_spec("mpi4py") is None:  # before petsc4py is looked for
+        raise ImportError(f"{HINT} (no module named 'mpi4py')")
+    try:
+        import petsc4py
+    except ImportError:
+        found = sorted(glob.glob(_DEBIAN))
+        if not found:
+            raise ImportError(HINT) from None
+        sys.path.append(found[-1])
+        try:
+            import petsc4py
+        except ImportError as exc:
+            raise ImportError(f"{HINT} ({exc})") from None
+    try:
+        from mpi4py import MPI
+    except ImportError as exc:
+        raise ImportError(f"{HINT} ({exc})") from None
+    if "petsc4py.PETSc" not in sys.modules:
+        petsc4py.init([])  # PETSc reads PETSC_OPTIONS, not vemwear's command line
+    from petsc4py import PETSc
+
+    if np.dtype(PETSc.ScalarType) != np.float64:
+        raise ImportError(f"PETSc is built with {PETSc.ScalarType} scalars; vemwear needs real")
+    return PETSc, MPI
+
+
+def available() -> bool:
+    """True when petsc4py and mpi4py import (a real-number PETSc with MUMPS)."""
+    try:
+        _modules()
+    except Exception:
+        return False
+    return True
+
+
+@cache
+def _library() -> Any:
+    """The PETSc shared library that petsc4py loaded, with the Schur routines typed."""
+    PETSc, _ = _modules()
+    paths: list[str] = []
+    try:
+        with open("/proc/self/maps", encoding="utf-8") as maps:
+            paths += [line.split()[-1] for line in maps if "/libpetsc" in line]
+    except OSError:  # not Linux: look where petsc4py says PETSc is
+        import petsc4py
+
+        conf = petsc4py.get_config()
+        where = os.path.join(conf["PETSC_DIR"], conf.get("PETSC_ARCH", ""), "lib")
+        paths += sorted(glob.glob(os.path.join(where, "libpetsc*")))
+    lib: Any = None
+    for path in dict.fromkeys(paths):
+        try:
+            lib = ctypes.CDLL(path)
+            lib.MatFactorSetSchurIS  # noqa: B018 - raises AttributeError if absent
+        except (OSError, AttributeError):
+            continue
+        break
+    else:
+        raise ImportError("the PETSc library of petsc4py was not found (needs PETSc >= 3.8)")
+    vp, ip = ctypes.c_void_p, ctypes.c_int
+    index = ctypes.c_int64 if np.dtype(PETSc.IntType).itemsize == 8 else ctypes.c_int32
+    dp = ctypes.POINTER(ctypes.POINTER(ctypes.c_double))
+    lib.MatFactorSetSchurIS.argtypes = [vp, vp]
+    lib.MatFactorGetSchurComplement.argtypes = [vp, ctypes.POINTER(vp), ctypes.POINTER(ip)]
+    lib.MatFactorRestoreSchurComplement.argtypes = [vp, ctypes.POINTER(vp), ip]
+    lib.MatGetSize.argtypes = [vp, ctypes.POINTER(index), ctypes.POINTER(index)]
+    lib.MatDenseGetLDA.argtypes = [vp, ctypes.POINTER(index)]
+    lib.MatDenseGetArrayRead.argtypes = [vp, dp]
+    lib.MatDenseRestoreArrayRead.argtypes = [vp, dp]
+    lib.index_type = index
+    return lib
+
+
+class _InStep(RuntimeError):
+    """A failure that every rank meets at the same point of a command (the ranks stay
+    in step: the workers go on serving, rank 0 reports it)."""
+
+
+def _check(code: int, what: str) -> None:
+    if code != 0:
+        raise _InStep(f"PETSc's {what} failed with error code {code}")
+
+
+class _Rank:
+    """This rank's side of the collective work: the communicators, its factorizations."""
+
+    def __init__(self) -> None:
+        PETSc, MPI = _modules()
+        self.PETSc, self.MPI = PETSc, MPI
+        self.comm = MPI.COMM_WORLD
+        self.rank, self.size = self.comm.Get_rank(), self.comm.Get_size()
+        self.factors: dict[int, _Local] = {}
+        self.next_id = 0
+        #: rank 0 is between the broadcast of a command and its end
+        self.busy = False
+
+    @contextmanager
+    def command(self, op: str, *args: Any) -> Iterator[None]:
+        """Rank 0: broadcast the command ``op`` to the workers, then do its part; a stop
+        signal (Ctrl-C, SIGTERM, SIGHUP) waits for the end of the command."""
+        if self.busy:
+            raise RuntimeError("the MPI ranks are out of step: a collective solve was interrupted")
+        with _signals_held():
+            if self.size > 1:
+                self.comm.bcast((op, args), root=0)
+            self.busy = True
+            try:
+                yield
+            except _InStep:
+                self.busy = False
+                raise
+            self.busy = False
+
+
+_STOP_SIGNALS = {getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)}
+
+
+@contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold the stop signals (delivered when the section ends): a rank must not leave a
+    collective operation half done, or the ranks go out of step."""
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - not POSIX
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+@cache
+def _rank() -> _Rank:
+    return _Rank()
+
+
+class _Local:
+    """One factorization, this rank's part: the solver, its vectors, the row split."""
+
+    def __init__(self, st: _Rank, n: int) -> None:
+        self.st = st
+        self.n = n
+        size = st.size
+        self.counts = np.array([n // size + (r < n % size) for r in range(size)])
+        self.starts = np.concatenate([[0], np.cumsum(self.counts)])
+        self.rows = int(self.counts[st.rank])
+        self.ksp: Any = None
+        self.F: Any = None
+        self.b: Any = None
+        self.x: Any = None
+        self.buf = np.zeros(self.rows)
+
+    def interior(self, R: NDArray[np.float64] | None, k: int) -> NDArray[np.float64] | None:
+        """``K_ii^{-1} R_i`` column by column (R on rank 0, (n, k)), gathered on rank 0."""
+        st, MPI = self.st, self.st.MPI
+        X = np.empty((self.n, k), order="F") if st.rank == 0 else None
+        col = np.empty(self.n)
+        split = [self.counts, self.starts[:-1], MPI.DOUBLE]
+        for j in range(k):
+            if st.rank == 0:
+                assert R is not None
+                col[:] = R[:, j]
+            st.comm.Scatterv([col, *split] if st.rank == 0 else None, self.buf, root=0)
+            self.b.setArray(self.buf)
+            self.F.solve(self.b, self.x)
+            out = self.x.getArray(readonly=True)
+            st.comm.Gatherv(out, [col, *split] if st.rank == 0 else None, root=0)
+            if X is not None:
+                X[:, j] = col
+        return X
+
+    def release(self) -> None:
+        for obj in (self.ksp, self.b, self.x):
+            obj.destroy()
+
+
+def _factorize(
+    st: _Rank, fid: int, K: sp.csr_matrix | None = None, last: NDArray[np.int64] | None = None
+) -> tuple[NDArray[np.float64], list[int]] | None:
+    """The collective factorization; returns on rank 0 the Schur complement (Fortran
+    order, lower triangle valid) and the megabytes of MUMPS's factorization on each
+    rank, None elsewhere."""
+    PETSc, comm = st.PETSc, st.comm
+    head = (K.shape[0], len(last)) if K is not None and last is not None else None
+    n, c = comm.bcast(head, root=0)
+    loc = _Local(st, n)
+    if st.rank == 0:
+        assert K is not None and last is not None
+        for r in range(1, st.size):
+            blk = K[loc.starts[r] : loc.starts[r + 1]]
+            comm.send((blk.indptr, blk.indices, blk.data), dest=r, tag=fid)
+        mine = K[: loc.starts[1]]
+        indptr, indices, data = mine.indptr, mine.indices, mine.data
+    else:
+        indptr, indices, data = comm.recv(source=0, tag=fid)
+    it = PETSc.IntType
+    shape = ((loc.rows, n), (loc.rows, n))
+    csr = (indptr.astype(it), indices.astype(it), np.asarray(data, dtype=np.float64))
+    A = PETSc.Mat().createAIJ(size=shape, csr=csr, comm=PETSc.COMM_WORLD)
+    del indptr, indices, data, csr
+    A.setOption(PETSc.Mat.Option.SPD, True)
+    ksp = PETSc.KSP().create(PETSc.COMM_WORLD)
+    ksp.setOperators(A)
+    ksp.setType("preonly")
+    pc = ksp.getPC()
+    pc.setType("cholesky")
+    pc.setFactorSolverType("mumps")
+    pc.setFactorSetUpSolverType()
+    F = pc.getFactorMatrix()
+    ids = np.asarray(last, dtype=it) if st.rank == 0 else np.zeros(0, dtype=it)
+    schur = PETSc.IS().createGeneral(ids, comm=PETSc.COMM_WORLD)
+    lib = _library()
+    _check(lib.MatFactorSetSchurIS(F.handle, schur.handle), "MatFactorSetSchurIS")
+    try:
+        pc.setUp()
+    except PETSc.Error as exc:
+        raise _InStep(f"MUMPS: {exc}") from None
+    info = F.getMumpsInfog(1)
+    if info < 0:
+        raise _InStep(f"MUMPS failed: INFOG(1) = {info}, INFOG(2) = {F.getMumpsInfog(2)}")
+    F.setMumpsIcntl(26, 0)  # solves: the interior system only (module docstring)
+    # MUMPS's INFO(22): the memory (MB) the factorization used on each rank
+    megabytes = comm.gather(int(F.getMumpsInfo(22)), root=0)
+    loc.x, loc.b = A.createVecs()
+    A.destroy()  # the solver keeps its own reference
+    schur.destroy()
+    loc.ksp, loc.F = ksp, F
+    st.factors[fid] = loc
+    # one product S z by an interior solve tells which triangle of MUMPS's block holds S
+    z = np.cos(np.arange(c) + 0.5) if st.rank == 0 else np.zeros(0)
+    K_c = K[last] if K is not None and last is not None else None
+    Y = loc.interior(None if K_c is None else (K_c.T @ z)[:, None], 1)
+    if st.rank != 0 or K_c is None or Y is None or last is None:
+        return None
+    Sz = K_c[:, last] @ z - K_c @ Y[:, 0]  # K_cc z - K_ci K_ii^{-1} K_ic z
+    return _schur_block(lib, F, c, z, Sz), megabytes
+
+
+def _schur_block(
+    lib: Any, F: Any, c: int, z: NDArray[np.float64], Sz: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """A copy of the dense Schur complement MUMPS left on rank 0, valid in its lower
+    triangle.
+
+    With ICNTL(19) = 2 (PETSc's choice for a Cholesky factor) MUMPS fills one triangle
+    of the block: the lower one (column-major) on one rank, the upper one on several
+    (PETSc 3.18 with MUMPS 5.5), the other holding what was left there. The triangle
+    whose symmetric matrix gives the product ``Sz = S z``, computed by a solve, is
+    taken, transposed to the lower one.
+    """
+    S, status = ctypes.c_void_p(), ctypes.c_int()
+    _check(
+        lib.MatFactorGetSchurComplement(F.handle, ctypes.byref(S), ctypes.byref(status)),
+        "MatFactorGetSchurComplement",
+    )
+    rows, cols, lda = lib.index_type(), lib.index_type(), lib.index_type()
+    lib.MatGetSize(S, ctypes.byref(rows), ctypes.byref(cols))
+    lib.MatDenseGetLDA(S, ctypes.byref(lda))
+    if (rows.value, cols.value) != (c, c):
+        raise RuntimeError(
+            f"MUMPS returned a {rows.value} x {cols.value} Schur block, not {c} x {c}"
+        )
+    ptr = ctypes.POINTER(ctypes.c_double)()
+    _check(lib.MatDenseGetArrayRead(S, ctypes.byref(ptr)), "MatDenseGetArrayRead")
+    try:
+        full = np.ctypeslib.as_array(ptr, shape=(lda.value * c,)) if c else np.zeros(0)
+        M = full.reshape(c, lda.value)[:, :c].T  # the block, a Fortran-ordered view
+        errors = [_symmetric_error(M, z, Sz, lower) for lower in (True, False)]
+        lower = errors[0] <= errors[1]
+        if min(errors) > 1e-8:
+            raise RuntimeError(
+                f"neither triangle of MUMPS's Schur block is the Schur complement "
+                f"(relative errors {errors[0]:.1e}, {errors[1]:.1e} of S z)"
+            )
+        return np.array(M if lower else M.T, order="F")
+    finally:
+        lib.MatDenseRestoreArrayRead(S, ctypes.byref(ptr))
+        lib.MatFactorRestoreSchurComplement(F.handle, ctypes.byref(S), status.value)
+
+
+def _symmetric_error(
+    M: NDArray[np.float64], z: NDArray[np.float64], Sz: NDArray[np.float64], lower: bool
+) -> float:
+    """``|A z - Sz| / |Sz|`` for the symmetric ``A`` of one triangle of ``M``
+    (triangular products: no c x c temporary)."""
+    if len(z) == 0:
+        return 0.0
+    (trmv,) = sla.get_blas_funcs(("trmv",), (M,))
+    Az = trmv(M, z, lower=lower) + trmv(M, z, lower=lower, trans=1) - np.diag(M) * z
+    return float(np.linalg.norm(Az - Sz)) / max(float(np.linalg.norm(Sz)), 1e-300)
+
+
+def _solve(st: _Rank, fid: int, B: NDArray[np.float64] | None = None, k: int = 0) -> Any:
+    """The collective solve ``K^{-1} B`` by block elimination (module docstring); the
+    workers take part in the ``2 k`` interior solves, rank 0 does the rest."""
+    loc = st.factors[fid]
+    if st.rank != 0:
+        loc.interior(None, k)
+        loc.interior(None, k)
+        return None
+    return B
+
+
+def serve() -> None:
+    """The loop of the ranks other than 0: take part in each command of rank 0 until it
+    sends ``stop`` (:func:`session` does when rank 0's work ends). The stop signals
+    that a launcher forwards to every rank are ignored here: rank 0 handles them (it
+    saves the finished levels) and then lets the workers go."""
+    old = {sig: signal.signal(sig, signal.SIG_IGN) for sig in _STOP_SIGNALS}
+    try:
+        _serve(_rank())
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+
+
+def _serve(st: _Rank) -> None:
+    while True:
+        op, args = st.comm.bcast(None, root=0)
+        if op == "stop":
+            break
+        try:
+            if op == "factorize":
+                _factorize(st, *args)
+            elif op == "solve":
+                _solve(st, *args)
+        except _InStep:  # rank 0 meets it too and reports it
+            continue
+        except BaseException:  # a rank out of step: end the whole job, not only this rank
+            import traceback
+
+            traceback.print_exc()
+            st.comm.Abort(1)
+    _release(st)
+
+
+def _release(st: _Rank) -> None:
+    for loc in st.factors.values():
+        loc.release()
+    st.factors.clear()
+
+
+@contextmanager
+def session() -> Iterator[bool]:
+    """The MPI job's frame: yields True on rank 0, which does the work, and False on the
+    other ranks, which then call :func:`serve`; when rank 0 leaves, the workers are
+    told to stop (a job whose rank 0 stopped within a collective solve is aborted)."""
+    st = _rank()
+    if st.rank != 0:
+        yield False
+        return
+    try:
+        yield True
+    finally:
+        if st.busy:
+            print(
+                "vemwear: rank 0 stopped within a collective solve; aborting the MPI job "
+                "(the saved levels are kept: resume with --resume)",
+                file=sys.stderr,
+                flush=True,
+            )
+            st.comm.Abort(1)
+        if st.size > 1:
+            st.comm.bcast(("stop", ()), root=0)
+        _release(st)
+
+
+class PetscSchur:
+    """MUMPS's Cholesky factorization of SPD ``K`` through PETSc, over the ranks of the
+    MPI job, with the Schur complement on ``last`` (the module docstring).
+
+    Made on rank 0 (the other ranks take part through :func:`serve`).
+
+    ``megabytes[r]`` is the memory MUMPS's factorization used on rank ``r`` (its
+    INFO(22)).
+
+    Parameters
+    ----------
+    K : (n, n) sparse SPD matrix
+    last : (c,) dof ids of the Schur block, in this order
+    points : unused (MUMPS orders the matrix itself); accepted for a common signature
+    """
+
+    name = "petsc"
+
+    def __init__(self, K: sp.spmatrix, last: NDArray[np.int64], points: Any = None) -> None:
+        st = _rank()
+        if st.rank != 0:
+            raise RuntimeError("PetscSchur is made on rank 0; the other ranks run serve()")
+        self.timings: dict[str, float] = {}
+        last = np.asarray(last, dtype=np.int64).ravel()
+        if len(_unique(last)) != len(last):
+            raise ValueError("Schur dofs: the list of contact dofs has repeated entries")
+        tick = time.perf_counter()
+        K = sp.csr_matrix(K, dtype=np.float64)
+        K.sum_duplicates()
+        self.n = K.shape[0]
+        self.last = last
+        self.K_c = K[last]  # (c, n): the rows of the contact dofs
+        self.K_ic = sp.csr_matrix(self.K_c.T)  # K is symmetric: the columns of them
+        self.fid = st.next_id
+        st.next_id += 1
+        self.timings["ordering"] = time.perf_counter() - tick
+        tick = time.perf_counter()
+        with st.command("factorize", self.fid):
+            made = _factorize(st, self.fid, K, last)
+        self.timings["factorization"] = time.perf_counter() - tick
+        tick = time.perf_counter()
+        assert made is not None
+        S, megabytes = made
+        self.megabytes: list[int] = megabytes
+        self.S_inv = compliance_from_schur(S, overwrite_s=True)
+        del S
+        self.timings["schur"] = time.perf_counter() - tick
+
+    def solve(
+        self, b: NDArray[np.float64], out: NDArray[np.float64] | None = None
+    ) -> NDArray[np.float64]:
+        """``K^{-1} b`` for a vector or an (n, k) block of right-hand sides, written to
+        ``out`` when given (an array of b's shape, Fortran-ordered)."""
+        b = np.asarray(b, dtype=np.float64)
+        if b.shape[0] != self.n:
+            raise ValueError(f"right-hand side has {b.shape[0]} rows, the matrix {self.n}")
+        k = 1 if b.ndim == 1 else b.shape[1]
+        B = b.reshape(self.n, k)
+        st = _rank()
+        loc = st.factors[self.fid]
+        with st.command("solve", self.fid, None, k):
+            Y = loc.interior(B, k)
+            assert Y is not None
+            # x_c = S^{-1} (b_c - K_ci y_i): y is zero on the contact dofs
+            Xc = self.S_inv @ (B[self.last] - self.K_c @ Y)
+            R = B - self.K_ic @ Xc  # its contact rows are not read by MUMPS
+            X = loc.interior(R, k)
+        assert X is not None
+        X[self.last] = Xc
+        if out is not None:
+            if out.shape != b.shape or out.dtype != np.float64:
+                raise ValueError("solve: out must be a float64 array of b's shape")
+            out.reshape(self.n, k, order="A")[...] = X
+            return out
+        return X[:, 0] if b.ndim == 1 else X

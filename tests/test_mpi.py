@@ -1,0 +1,283 @@
+"""One simulation over the ranks of an MPI job (the petsc backend) gives the serial run.
+
+Real processes: ``mpirun -n N python -m vemwear run CONFIG -o OUT --backend petsc``
+against ``python -m vemwear run CONFIG -o OUT`` (the default backend), both read back
+from ``result.h5`` with h5py. These tests need Open MPI's ``mpirun`` and a Python in
+which petsc4py and mpi4py import (Debian's python3 with python3-petsc4py, or conda-forge;
+docs/mpi.md); ``.ci/run`` runs them with Debian's python3 (and makes a skip a failure
+there with ``VEMWEAR_MPI_TESTS=required``), elsewhere they are skipped.
+The refusals that need no PETSc run everywhere.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from functools import cache
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from conftest import small_config
+
+MPIRUN = shutil.which("mpirun")
+RTOL = 1e-10
+#: the arrays of every kept level that must agree
+COMPARED = ("wear", "u_nu", "u", "p", "t", "u_levels")
+
+CONFIG_2D = small_config("mpi 2d", divisions=(16, 8), steps=40, solver={"backend": None})
+
+CONFIG_3D = """\
+title = "mpi 3d"
+[mesh]
+generator = "hexahedra"
+size = [2.0, 1.0, 1.0]
+divisions = [6, 3, 3]
+[boundary]
+clamped = "xmin"
+contact = "zmin"
+free = "rest"
+[material]
+lam = 4.0
+eta = 4.0
+[loads]
+f1 = [0.0, 0.0, -0.06]
+[contact]
+p = { type = "linear", c = 0.4 }
+g = 0.1
+mu = 0.2
+kappa = 2.0
+v_star = [1.0, 0.0, 0.0]
+[time]
+T = 1.0
+steps = 6
+[output]
+figures = false
+vtk = false
+store_u = "all"
+"""
+
+
+@cache
+def _petsc_here() -> bool:
+    """Whether petsc4py and mpi4py import in this Python (asked in a child process: MPI
+    is not initialized in the test process)."""
+    probe = "from vemwear.solvers.backends.petsc import available as a; raise SystemExit(not a())"
+    return subprocess.run([sys.executable, "-c", probe], capture_output=True).returncode == 0
+
+
+def _need_mpi() -> None:
+    # .ci/run sets VEMWEAR_MPI_TESTS=required where it installed PETSc: fail, not skip
+    missing = pytest.fail if os.environ.get("VEMWEAR_MPI_TESTS") == "required" else pytest.skip
+    if MPIRUN is None:
+        missing("no mpirun: the MPI tests need Open MPI (docs/mpi.md)")
+    if not _petsc_here():
+        missing(
+            f"petsc4py/mpi4py do not import in {sys.executable}: the MPI tests run with "
+            "Debian's python3 and python3-petsc4py (.ci/run, docs/mpi.md)"
+        )
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (src, env.get("PYTHONPATH")) if p)
+    env.setdefault("OMPI_MCA_rmaps_base_oversubscribe", "1")
+    return env
+
+
+def _mpirun(n: int, *args: str) -> list[str]:
+    assert MPIRUN is not None
+    return [MPIRUN, "--allow-run-as-root", "--oversubscribe", "-n", str(n), *args]
+
+
+def _vemwear(*args: str) -> list[str]:
+    return [sys.executable, "-m", "vemwear", "run", *args, "--no-progress"]
+
+
+def _run(cmd: list[str], timeout: float = 300) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(cmd, capture_output=True, text=True, env=_env(), timeout=timeout)
+
+
+def _arrays(out: Path) -> dict[str, np.ndarray]:
+    with h5py.File(out / "result.h5", "r") as f:
+        return {k: f[k][()] for k in COMPARED}
+
+
+def _assert_equal_runs(ref: dict[str, np.ndarray], got: dict[str, np.ndarray]) -> None:
+    for k in COMPARED:
+        a, b = ref[k], got[k]
+        assert a.shape == b.shape, k
+        scale = float(np.abs(a).max())
+        assert scale > 0, k  # a run with nothing in contact would prove nothing
+        assert float(np.abs(a - b).max()) <= RTOL * scale, (k, float(np.abs(a - b).max()))
+
+
+@pytest.fixture(scope="module")
+def serial(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[Path, dict]]:
+    """The serial runs with the default backend, one per case."""
+    _need_mpi()
+    root = tmp_path_factory.mktemp("serial")
+    runs = {}
+    for name, text in (("2d", CONFIG_2D), ("3d", CONFIG_3D)):
+        cfg = root / f"{name}.toml"
+        cfg.write_text(text)
+        done = _run(_vemwear(str(cfg), "-o", str(root / name)))
+        assert done.returncode == 0, done.stderr
+        runs[name] = (cfg, _arrays(root / name))
+    return runs
+
+
+@pytest.mark.parametrize(("case", "ranks"), [("2d", 1), ("2d", 2), ("2d", 4), ("3d", 1), ("3d", 2)])
+def test_mpi_run_equals_serial(serial, tmp_path: Path, case: str, ranks: int) -> None:
+    cfg, ref = serial[case]
+    out = tmp_path / "out"
+    done = _run(_mpirun(ranks, *_vemwear(str(cfg), "-o", str(out), "--backend", "petsc")))
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.stdout.count(": done") == 1  # rank 0 reports, the other ranks say nothing
+    _assert_equal_runs(ref, _arrays(out))
+    with h5py.File(out / "result.h5", "r") as f:
+        assert int(f["completed"][()]) == len(ref["t"])
+
+
+STOPPER = """\
+import importlib, sys
+levels = importlib.import_module("vemwear.simulate.levels")
+real = levels.run_levels
+
+def patched(*args, **kwargs):
+    def stop(n, _solution):
+        if n == {level}:
+            raise KeyboardInterrupt
+    kwargs["callback"] = stop
+    return real(*args, **kwargs)
+
+levels.run_levels = patched
+from vemwear.cli.main import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_two_rank_run_stopped_resumes_on_one_rank(serial, tmp_path: Path) -> None:
+    cfg, ref = serial["2d"]
+    script = tmp_path / "stopper.py"
+    script.write_text(STOPPER.format(level=20))
+    out = tmp_path / "out"
+    cmd = [sys.executable, str(script), "run", str(cfg), "-o", str(out), "--no-progress"]
+    stopped = _run(_mpirun(2, *cmd, "--backend", "petsc"))
+    assert stopped.returncode == 130, stopped.stdout + stopped.stderr
+    assert "vemwear: interrupted; the 20 finished time levels" in stopped.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["partial"] is True and summary["completed"] == 20
+    resumed = _run(_vemwear(str(cfg), "-o", str(out), "--resume", "--backend", "petsc"))
+    assert resumed.returncode == 0, resumed.stdout + resumed.stderr
+    assert "resumed from level" in resumed.stdout
+    _assert_equal_runs(ref, _arrays(out))
+
+
+def test_mpirun_without_petsc_backend_is_refused(tmp_path: Path) -> None:
+    """Two ranks and the default backend: one line, exit 2, nothing written (whether or
+    not PETSc is installed)."""
+    if MPIRUN is None:
+        pytest.skip("no mpirun: the MPI tests need Open MPI (docs/mpi.md)")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(CONFIG_2D)
+    out = tmp_path / "out"
+    done = _run(_mpirun(2, *_vemwear(str(cfg), "-o", str(out))), timeout=120)
+    assert done.returncode == 2, done.stdout + done.stderr
+    lines = [ln for ln in done.stderr.splitlines() if ln.startswith("vemwear: error:")]
+    assert len(lines) == 1, done.stderr
+    assert "2 MPI ranks" in lines[0] and "--backend petsc" in lines[0]
+    assert not out.exists()
+
+
+def test_petsc_backend_without_petsc4py_names_the_way_to_get_it(tmp_path: Path) -> None:
+    if _petsc_here():
+        pytest.skip("petsc4py imports here: the refusal is for a Python without it")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(CONFIG_2D)
+    out = tmp_path / "out"
+    done = _run(_vemwear(str(cfg), "-o", str(out), "--backend", "petsc"), timeout=120)
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert "python3-petsc4py" in done.stderr and "conda-forge" in done.stderr
+    assert not out.exists()
+
+
+def test_sigterm_to_mpirun_saves_the_finished_levels(serial, tmp_path: Path) -> None:
+    """mpirun forwards SIGTERM to every rank: rank 0 saves its finished levels (the
+    workers wait for it) and says how to resume."""
+    cfg = tmp_path / "long.toml"
+    cfg.write_text(CONFIG_2D.replace("steps = 40", "steps = 200000"))
+    out = tmp_path / "out"
+    cmd = _mpirun(2, *_vemwear(str(cfg), "-o", str(out), "--backend", "petsc"))
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_env())
+    deadline = time.monotonic() + 120
+    while not (out / "result.h5").exists() and time.monotonic() < deadline:
+        time.sleep(0.2)
+    time.sleep(2.0)  # some levels solved
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    text = err.decode()
+    assert "vemwear: terminated (SIGTERM); stopping" in text
+    assert "finished time levels (of 200001) are saved" in text
+    assert "continue with: mpirun -n 2 vemwear run" in text and "--resume --backend petsc" in text
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["partial"] is True and summary["reason"] == "terminated (SIGTERM)"
+    assert 0 < summary["completed"] < 200001
+    assert (out / "checkpoint.npz").exists()
+
+
+BACKEND_CHECK = """\
+import numpy as np
+from vemwear.paper import ex52
+from vemwear.solvers.backends import schur_factorize
+from vemwear.solvers.backends.petsc import PetscSchur, serve, session
+
+with session() as root:
+    if not root:
+        serve()
+    else:
+        s = ex52.problem(0.2, 2.0, divisions=(256, 128), steps=1).discrete.system
+        K, last = s.K, s.contact_dofs.ravel()
+        ref = schur_factorize(K, last, s.dof_points, "scipy")
+        got = PetscSchur(K, last)
+        B = np.random.default_rng(1).normal(size=(K.shape[0], 3))
+        X = got.solve(B)
+        print("S_inv", np.abs(got.S_inv - ref.S_inv).max() / np.abs(ref.S_inv).max())
+        print("solve", np.abs(X - ref.solve(B)).max() / np.abs(ref.solve(B)).max())
+"""
+
+
+def test_schur_block_and_solves_on_two_ranks_at_a_larger_size(tmp_path: Path) -> None:
+    """512 contact dofs: MUMPS's Schur block on two ranks has its lower triangle partly
+    filled with leftovers (not zero), so the triangle is told by a product with S."""
+    _need_mpi()
+    script = tmp_path / "check.py"
+    script.write_text(BACKEND_CHECK)
+    done = _run(_mpirun(2, sys.executable, str(script)))
+    assert done.returncode == 0, done.stdout + done.stderr
+    errors = dict(line.split() for line in done.stdout.splitlines())
+    assert float(errors["S_inv"]) < RTOL and float(errors["solve"]) < RTOL, errors
+
+
+def test_other_commands_under_mpirun_are_refused(tmp_path: Path) -> None:
+    if MPIRUN is None:
+        pytest.skip("no mpirun: the MPI tests need Open MPI (docs/mpi.md)")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(CONFIG_2D)
+    cmd = _mpirun(2, sys.executable, "-m", "vemwear", "check", str(cfg))
+    done = _run(cmd, timeout=120)
+    assert done.returncode == 2, done.stdout + done.stderr
+    lines = [ln for ln in done.stderr.splitlines() if ln.startswith("vemwear: error:")]
+    assert lines == [
+        "vemwear: error: started as 2 MPI ranks: only `vemwear run` (with the petsc backend) "
+        "runs on several ranks; run this command without mpirun"
+    ]
+    assert "valid" not in done.stdout
