@@ -30,7 +30,7 @@ from conftest import small_config
 MPIRUN = shutil.which("mpirun")
 RTOL = 1e-10
 #: the arrays of every kept level that must agree
-COMPARED = ("wear", "u_nu", "u", "p", "t", "u_levels")
+COMPARED = ("wear", "u_nu", "u", "p_soft", "p_rigid", "t", "u_levels")
 
 CONFIG_2D = small_config("mpi 2d", divisions=(16, 8), steps=40, solver={"backend": None})
 
