@@ -325,6 +325,7 @@ class CondensedNewton:
             raise ValueError("recover_many: the levels' y = N u are needed under load control")
         D = np.column_stack([self.normal_displacement(st.F) for st in steps])
         A = self.rigid.amplitudes(np.column_stack(ys), D, self.H @ np.vstack([P, Q]))
+        rhs[self.rigid.anchors] = 0.0  # G ignores them: no copy of the block to clear them
         X = self.factor.solve(rhs, out=out)
         X += self.rigid.R @ A
         return X

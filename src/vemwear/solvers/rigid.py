@@ -86,11 +86,21 @@ class AnchoredFactor:
 
 
 def anchored_matrix(K: sp.spmatrix, anchors: NDArray[np.int64]) -> sp.csr_matrix:
-    """K with the rows and columns of the anchor dofs replaced by the identity's."""
-    keep = np.ones(K.shape[0])
-    keep[anchors] = 0.0
-    D = sp.diags(keep)
-    return (D @ K @ D + sp.diags(1.0 - keep)).tocsr()
+    """K with the rows and columns of the anchor dofs replaced by the identity's, on K's
+    own sparsity pattern (its stored zeros kept: the ordering of the factorization sees
+    the same graph as for K, and a product D K D, which drops them, gives a slower one)."""
+    Ka = sp.csr_matrix(K, copy=True)
+    Ka.sort_indices()
+    rows = np.repeat(np.arange(Ka.shape[0]), np.diff(Ka.indptr))
+    on = np.zeros(Ka.shape[0], dtype=bool)
+    on[anchors] = True
+    hit = on[rows] | on[Ka.indices]
+    Ka.data[hit] = 0.0
+    diag = hit & (rows == Ka.indices)
+    if int(diag.sum()) != len(anchors):  # K's diagonal is stored: SPD on the free dofs
+        raise ValueError("anchored_matrix: an anchor's diagonal entry is not stored")
+    Ka.data[diag] = 1.0
+    return Ka
 
 
 @dataclass
