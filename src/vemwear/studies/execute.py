@@ -133,7 +133,13 @@ def study_client(
                 _tell_dashboard(own, say)
                 yield own
             except BaseException:
-                _forget([cluster])  # and closed below
+                _forget([cluster])
+                # closed now with short timeouts: a nanny that is starting a worker again
+                # (one killed with the client) would hold the usual close for 10 s
+                with contextlib.suppress(Exception):
+                    own.close(timeout=1)
+                with contextlib.suppress(Exception):
+                    cluster.close(timeout=1)
                 raise
 
 
