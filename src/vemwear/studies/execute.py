@@ -118,6 +118,7 @@ def study_client(
     n = workers or os.cpu_count() or 1
     # the settings stay for the cluster's life: a worker that dies is started again
     with dask.config.set(LOCAL_WORKERS):
+        before = set(_clusters())
         cluster = _start_local_cluster(n)
         with cluster, Client(cluster) as own:
             try:
@@ -133,13 +134,16 @@ def study_client(
                 _tell_dashboard(own, say)
                 yield own
             except BaseException:
-                _forget([cluster])
+                # every cluster made here (Dask's exit hook would close one that is left
+                # with a graceful wait for a worker being started again: 10 s)
+                _forget({cluster} | (set(_clusters()) - before))
                 # closed now with short timeouts: a nanny that is starting a worker again
                 # (one killed with the client) would hold the usual close for 10 s
                 with contextlib.suppress(Exception):
                     own.close(timeout=1)
                 with contextlib.suppress(Exception):
                     cluster.close(timeout=1)
+                _kill_children()
                 raise
 
 
@@ -218,6 +222,17 @@ def _kill_workers(cluster: Any) -> None:
         if isinstance(pid, int):
             with contextlib.suppress(OSError):
                 os.kill(pid, signal.SIGKILL)
+
+
+def _kill_children() -> None:
+    """SIGKILL this process's multiprocessing children left after a stop: a worker that
+    a nanny was starting again when the stop came (unknown to the cluster) would hold
+    the interpreter's exit, which joins its children, until it gives up (10 s)."""
+    import multiprocessing
+
+    for child in multiprocessing.active_children():
+        with contextlib.suppress(Exception):
+            child.kill()
 
 
 def _tell_dashboard(client: Any, say: Callable[[str], None] | None) -> None:
