@@ -89,8 +89,9 @@ def test_uzawa_agrees_with_newton(mu, kappa):
 
 @pytest.mark.slow
 def test_example_5_2_newton_and_uzawa_agree():
-    """Example 5.2 at full size (h = 1/16, k = 1/64): u, w and lam to 1e-8, max norm."""
-    for mu, kappa in [(0.2, 2.0), (0.2, 10.0), (0.6, 10.0)]:
+    """Example 5.2 at full size (h = 1/16, k = 1/64): u, w and lam to 1e-8, max norm
+    (data sets 1 and 3; set 2 is set 3 with a smaller mu)."""
+    for mu, kappa in [(0.2, 2.0), (0.6, 10.0)]:
         pr = paper_problem(divisions=(32, 16), steps=64, mu=mu, kappa=kappa)
         rn = simulate(pr, SolverOptions("newton"))
         ru = simulate(pr, SolverOptions("uzawa", tol=1e-11))
