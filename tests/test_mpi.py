@@ -25,6 +25,7 @@ import h5py
 import numpy as np
 import pytest
 
+from conftest import CONFIG_3D as CONFIG_3D_SMALL
 from conftest import small_config
 
 MPIRUN = shutil.which("mpirun")
@@ -34,35 +35,13 @@ COMPARED = ("wear", "u_nu", "u", "p_soft", "p_rigid", "t", "u_levels")
 
 CONFIG_2D = small_config("mpi 2d", divisions=(16, 8), steps=40, solver={"backend": None})
 
-CONFIG_3D = """\
-title = "mpi 3d"
-[mesh]
-generator = "hexahedra"
-size = [2.0, 1.0, 1.0]
-divisions = [6, 3, 3]
-[boundary]
-clamped = "xmin"
-contact = "zmin"
-free = "rest"
-[material]
-lam = 4.0
-eta = 4.0
-[loads]
-f1 = [0.0, 0.0, -0.06]
-[contact]
-p = { type = "linear", c = 0.4 }
-g = 0.1
-mu = 0.2
-kappa = 2.0
-v_star = [1.0, 0.0, 0.0]
-[time]
-T = 1.0
-steps = 6
-[output]
-figures = false
-vtk = false
-store_u = "all"
-"""
+CONFIG_3D = (  # conftest's 3D data on 6 x 3 x 3 hexahedra, 6 steps, the default backend
+    CONFIG_3D_SMALL.replace('title = "3d small"', 'title = "mpi 3d"')
+    .replace("divisions = [4, 2, 2]", "divisions = [6, 3, 3]")
+    .replace("steps = 8", "steps = 6")
+    .replace('[solver]\nbackend = "scipy"\n', "")
+    + 'figures = false\nvtk = false\nstore_u = "all"\n'
+)
 
 
 @cache

@@ -319,7 +319,7 @@ def test_a_turning_holder_balances_force_and_moment_and_tilts_the_pad(order: int
     X = pr.mesh.points[top] - centre
     rigid = trans[0] + theta[0, 0] * np.column_stack([-X[:, 1], X[:, 0]])
     assert np.abs(res.u[-1][top] - rigid).max() <= 1e-12 * np.abs(res.u[-1]).max()
-    assert trans[0, 0] == 0.0 or abs(trans[0, 0]) <= 1e-15  # ux = 0 prescribed
+    assert abs(trans[0, 0]) <= 1e-15  # ux = 0 prescribed
     # before wear, with the layer's nodal quadrature w_i: p_i = P / sum(w) - M (x_i -
     # x_0) / I, I = sum(w (x - x_0)^2) (12 M / L^3 in the limit); a layer of stiffness
     # 1 tilts the punch by theta = M / I
