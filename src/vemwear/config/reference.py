@@ -18,14 +18,30 @@ from pydantic import BaseModel
 from ..mesh.registry import FAMILIES
 from . import schema as s
 from .mesh_forms import MESH_FORMS, MeshFile
+from .sections import Section
 
 __all__ = ["config_json_schema", "reference_tables", "update_reference"]
 
 _SIMPLE = ("number", "integer", "string", "boolean")
 
 
+def _build_all() -> None:
+    """Build every table's deferred validator and serializer.
+
+    A JSON Schema encodes defaults that are tables with their classes' serializers,
+    which ``defer_build`` leaves unbuilt until a first validation (pydantic < 2.14
+    then fails with "'MockValSer' object is not an instance of 'SchemaSerializer'").
+    """
+    todo: list[type[BaseModel]] = [Section]
+    while todo:
+        cls = todo.pop()
+        todo.extend(cls.__subclasses__())
+        cls.model_rebuild(force=True)
+
+
 def config_json_schema() -> dict[str, Any]:
     """The JSON Schema of a configuration file (for editors' completion and checks)."""
+    _build_all()
     return s.ConfigFile.model_json_schema()
 
 
@@ -78,6 +94,7 @@ def _table(head: list[str], rows: list[list[str]]) -> str:
 
 def reference_tables() -> dict[str, str]:
     """The key tables of ``docs/config.md`` by name."""
+    _build_all()
     head = ["key", "type", "default", "meaning"]
     fams = [
         [f"`{f.name}`", ", ".join(f"`{a}`" for a in f.aliases) or "—", f.description]
