@@ -209,6 +209,18 @@ def reference(work: Path) -> Reference:
     return Reference(study, study_arrays(out), files(out), [(0.0, a), (a, b), (b, end)])
 
 
+def _failures(out: Path) -> str:
+    """The errors of the runs logged as failed in ``OUTDIR/log``."""
+    import json
+
+    errors = []
+    for p in sorted((out / "log").glob("*.json")):
+        rec = json.loads(p.read_text())
+        if rec.get("status") == "failed":
+            errors.append(f"; run {rec['id']}: {rec['error']}")
+    return "".join(errors)
+
+
 @dataclass
 class Trial:
     phase: str
@@ -286,7 +298,7 @@ def trial(
         recovered = "rerun"
         done = subprocess.run(cmd, capture_output=True, text=True, env=_env())
         if done.returncode != 0:
-            why = f"rerun exit {done.returncode}: {done.stderr.strip()[-300:]}"
+            why = f"rerun exit {done.returncode}: {done.stderr.strip()[-300:]}{_failures(out)}"
     if not why:
         got = study_arrays(out)
         bad = [k for k, v in ref.arrays.items() if k not in got or not _equal(got[k], v)]

@@ -360,11 +360,15 @@ def test_a_stopped_study_started_again_skips_finished_runs(
         time.sleep(0.05)
     done = {d.name: (d / "result.npz").stat().st_mtime_ns for d in runs if is_complete(d)}
     assert 2 <= len(done) < 10, len(done)
+    # a worker killed after a run's result was complete but before its record was logged
+    (out / "log" / f"{min(done)}.json").unlink()
     r = subprocess.run(cmd, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert f"10: {10 - len(done)} computed, {len(done)} finished earlier, 0 failed" in r.stdout
     for name, mtime in done.items():  # untouched
         assert (out / "runs" / name / "result.npz").stat().st_mtime_ns == mtime
+    logged = {p.stem for p in (out / "log").glob("*.json")}
+    assert logged == {d.name for d in (out / "runs").glob("r*")} and len(logged) == 10
     ds = xr.open_dataset(out / "study.nc", engine="h5netcdf")
     assert (ds["status"].values == "done").all() and np.all(np.diff(ds["max_wear"].values) > 0)
     ds.close()

@@ -118,9 +118,10 @@ def read_record(out: Path, rid: str) -> dict[str, Any] | None:
 
 def complete_record(out: Path, rid: str, params: dict[str, Any], executed: bool) -> dict:
     """The record of a run whose directory holds a complete result (its wall time and
-    warnings from the logged record, if that is there)."""
+    warnings from the logged record, if that is there). A run killed after its result
+    was complete but before its record was logged is logged now."""
     old = read_record(out, rid) or {}
-    return {
+    rec = {
         "id": rid,
         "params": params,
         "status": "done",
@@ -129,6 +130,9 @@ def complete_record(out: Path, rid: str, params: dict[str, Any], executed: bool)
         "executed": executed,
         "warnings": list(old.get("warnings", [])),
     }
+    if old.get("status") != "done":
+        write_record(out, rec)
+    return rec
 
 
 def write_record(out: Path, rec: dict[str, Any]) -> None:
