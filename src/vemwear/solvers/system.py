@@ -181,6 +181,12 @@ class ContactSystem:
         return self.N[:, cols].T.tocsr(), self.Tau[:, cols].T.tocsr()
 
     @cached_property
+    def transposes(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """``N^T`` and ``Tau^T`` (CSR), kept: an iteration that applies them at every
+        step would otherwise rebuild them each time (the same sums in the same order)."""
+        return self.N.T.tocsr(), self.Tau.T.tocsr()
+
+    @cached_property
     def K_row_sums(self) -> NDArray[np.float64]:
         """The absolute row sums of K, for backward errors."""
         return np.asarray(abs(self.K).sum(axis=1)).ravel()
@@ -226,9 +232,8 @@ class ContactSystem:
         ``N^T(weights (p_soft + p_rigid)) + Tau^T(weights fric q)``, q the pressure
         friction acts on (:meth:`friction_pressure`)."""
         q = self.friction_pressure(p_soft, p_rigid)
-        return self.N.T @ (self.weights * (p_soft + p_rigid)) + self.Tau.T @ (
-            self.friction_weights(fric, q)
-        )
+        NT, TT = self.transposes
+        return NT @ (self.weights * (p_soft + p_rigid)) + TT @ self.friction_weights(fric, q)
 
     def contact_force(self, u: NDArray, p_rigid: NDArray, fric: NDArray, w: NDArray):
         """The contact term of the residual and the soft-layer pressure at ``u``."""

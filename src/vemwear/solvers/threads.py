@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import threading
 from collections.abc import Iterator
 from functools import cache
 from typing import Any
@@ -50,15 +51,25 @@ def _refresh() -> Any:
     return ThreadpoolController()
 
 
+#: How deep this thread is in :func:`solver_threads` contexts: an inner one (a solve
+#: of an iteration inside a run's context) finds the limits set and costs nothing.
+_depth = threading.local()
+
+
 @contextlib.contextmanager
 def solver_threads() -> Iterator[None]:
     """Run the enclosed kernels with the OpenBLAS pools at one thread each."""
-    ctl = _openblas() if os.environ.get("VEMWEAR_BLAS_THREADS") != "keep" else None
+    depth = getattr(_depth, "n", 0)
+    ctl = _openblas() if depth == 0 and os.environ.get("VEMWEAR_BLAS_THREADS") != "keep" else None
     if ctl is None:
         yield
         return
-    with ctl.limit(limits=1):
-        yield
+    _depth.n = depth + 1
+    try:
+        with ctl.limit(limits=1):
+            yield
+    finally:
+        _depth.n = depth
 
 
 def blas_info() -> list[dict[str, Any]]:
