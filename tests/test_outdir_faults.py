@@ -132,6 +132,25 @@ def test_clean_empties_a_set_up_killed_before_its_first_checkpoint(
     assert list(out.iterdir()) == []
 
 
+def test_a_run_killed_while_probing_its_directory_leaves_a_temporary(
+    cfg: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Killed between the probe file's creation and its removal, a run leaves only that
+    file: the directory is taken as empty (with a warning), and clean removes it."""
+    import tempfile
+
+    from vemwear.runner.outdir import PROBE_PREFIX
+
+    out = tmp_path / "out"
+    out.mkdir()
+    fd, name = tempfile.mkstemp(dir=out, prefix=PROBE_PREFIX)
+    os.close(fd)
+    assert _run(cfg, out) == 0
+    assert "temporary file(s) of killed runs" in capsys.readouterr().err
+    assert main(["clean", str(out)]) == 0
+    assert not Path(name).exists() and (out / "result.npz").is_file()
+
+
 def test_resume_of_a_finished_run_says_it_is_complete(
     cfg: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

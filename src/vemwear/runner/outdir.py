@@ -360,7 +360,7 @@ def check_output_dir(
     _check_place(out, protect)
     refuse_locked(out)
     if out.is_dir() and not killed_before_checkpoint(out):
-        if any(out.iterdir()):
+        if any(not is_temporary(p.name) for p in out.iterdir()):  # stale ones: a warning
             marker = read_marker(out)
             if marker is None:
                 raise OutputDirError(
@@ -388,11 +388,16 @@ def check_output_dir(
     return out
 
 
+#: The probe's name is a temporary's (``.NAME.tmp-XXXXXXXX``): one left by a process
+#: killed while probing is found and removed like any stale temporary.
+PROBE_PREFIX = ".vemwear-probe.tmp-"
+
+
 def _probe(out: Path) -> None:
     """Write and remove a file in ``out``: writable for real (also for root, read-only
     mounts and full disks)."""
     try:
-        fd, name = tempfile.mkstemp(dir=out, prefix=".vemwear-probe-")
+        fd, name = tempfile.mkstemp(dir=out, prefix=PROBE_PREFIX)
         try:
             os.write(fd, b"0" * 4096)
             os.fsync(fd)
