@@ -138,3 +138,35 @@ def test_solution_roundtrip_and_reference_comparison() -> None:
     # not nested
     with pytest.raises(NonNestedMeshError):
         cmp.errors(simulate(ex55.problem(3)))
+
+
+def test_blocks_of_levels_give_the_numbers_of_single_levels(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Comparison.errors in blocks of levels (one block here) and level by level: the
+    same numbers, bit for bit, every variant, NaN at the levels the coarse run did not
+    store; Projection.many is the projection of every field."""
+    import vemwear.post.compare as compare
+
+    fine = simulate(ex55.problem(8), store=ex55.common_times([2, 4]))
+    coarse = Solution.from_result(simulate(ex55.problem(4), store=[0.25, 0.75, 1.0]))
+    assert compare._BLOCK // fine.problem.mesh.n_cells >= len(coarse.t)  # one block
+    whole = Comparison(fine).errors(coarse)
+    monkeypatch.setattr(compare, "_BLOCK", 1)  # one level at a time
+    single = Comparison(fine).errors(coarse)
+    assert np.isnan(whole.displacement["H1"][[0, 2]]).all()
+    assert np.isfinite(whole.displacement["H1"][[1, 3, 4]]).all()
+    for a, b in (
+        (whole.displacement, single.displacement),
+        (whole.wear, single.wear),
+        (whole.absolute, single.absolute),
+    ):
+        assert a.keys() == b.keys()
+        for k in a:
+            np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+    proj = Comparison(fine).fine.projection
+    block = proj.many(fine.u)
+    for i, u in enumerate(fine.u):
+        one = proj(u)
+        np.testing.assert_array_equal(block.value[i], one.value)
+        np.testing.assert_array_equal(block.gradient[i], one.gradient)

@@ -44,11 +44,15 @@ def point_segment_distance(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Distance of points P to segments AB (broadcast) and the parameter s in [0, 1] of the
     foot of the perpendicular, ``A + s (B - A)``."""
+    # sums over the two coordinates written out: reductions over an axis of length 2 are
+    # slow, and these are the same numbers
     d = B - A
-    dd = np.maximum(np.sum(d * d, axis=-1), 1e-300)
-    s = np.clip(np.sum((P - A) * d, axis=-1) / dd, 0.0, 1.0)
-    foot = A + s[..., None] * d
-    return np.linalg.norm(P - foot, axis=-1), s
+    d0, d1 = d[..., 0], d[..., 1]
+    dd = np.maximum(d0 * d0 + d1 * d1, 1e-300)
+    pa = P - A
+    s = np.clip((pa[..., 0] * d0 + pa[..., 1] * d1) / dd, 0.0, 1.0)
+    r = P - (A + s[..., None] * d)
+    return np.sqrt(r[..., 0] * r[..., 0] + r[..., 1] * r[..., 1]), s
 
 
 def vertex_averages(mesh: Mesh) -> NDArray[np.float64]:
@@ -236,18 +240,21 @@ def nested_cells(coarse: Mesh, fine: Mesh, *, tol: float | None = None) -> NDArr
             f"the meshes are not nested: {out.size} fine cells lie outside the coarse mesh "
             f"(first: cell {f} with vertices {fine.points[fine.cell(f)].tolist()})"
         )
-    for n, (ids, verts) in fine.groups.items():
-        P = fine.points[verts].reshape(-1, 1, 2)  # every vertex of the group's cells
-        c = np.repeat(cell[ids], n)
-        A, B = C[V[c]], C[Vn[c]]
-        ok = inside_polygons(P, A, B)
-        b = np.flatnonzero(~ok)  # on the coarse cell's boundary, or outside
-        ok[b] = point_segment_distance(P[b], A[b], B[b])[0].min(axis=1) <= tol
-        if not np.all(ok):
-            j = int(np.flatnonzero(~ok)[0])
-            f = int(ids[j // n])
-            raise NonNestedMeshError(
-                f"the meshes are not nested: fine cell {f} (vertex {int(verts.ravel()[j])} at "
-                f"{P[j, 0].tolist()}) is not inside coarse cell {int(c[j])}"
-            )
+    # every (fine vertex, coarse cell) pair once: the fine cells around a fine vertex lie
+    # mostly in one coarse cell
+    verts, owner = fine.cell_vertices, cell[fine.edge_cells]
+    key = verts * coarse.n_cells + owner
+    pairs, first = np.unique(key, return_index=True)
+    P = fine.points[verts[first]][:, None, :]
+    A, B = C[V[owner[first]]], C[Vn[owner[first]]]
+    ok = inside_polygons(P, A, B)
+    b = np.flatnonzero(~ok)  # on the coarse cell's boundary, or outside
+    ok[b] = point_segment_distance(P[b], A[b], B[b])[0].min(axis=1) <= tol
+    if not np.all(ok):
+        j = int(np.flatnonzero(np.isin(key, pairs[~ok]))[0])
+        f = int(fine.edge_cells[j])
+        raise NonNestedMeshError(
+            f"the meshes are not nested: fine cell {f} (vertex {int(verts[j])} at "
+            f"{fine.points[verts[j]].tolist()}) is not inside coarse cell {int(owner[j])}"
+        )
     return cell

@@ -96,15 +96,31 @@ def linear_norms_sq(
 
     ``int_K |c + D d|^2 = |K| |c|^2 + 2 c . D M1 + tr(D M2 D^T)`` with the moments about
     ``xbar`` (:func:`~vemwear.vem.quadrature.polygon_moments`), and ``|K| |D|_F^2``.
+    ``c`` (cells, 2) and ``D`` (cells, 2, 2) may carry a leading axis of fields (then the
+    results are (fields, cells)).
     """
+    return _norms_sq(area, M1, M2, c[..., 0], c[..., 1], *_entries(D))
+
+
+def _entries(D: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+    """``D[..., 0, 0], D[..., 0, 1], D[..., 1, 0], D[..., 1, 1]``."""
+    return D[..., 0, 0], D[..., 0, 1], D[..., 1, 0], D[..., 1, 1]
+
+
+def _norms_sq(
+    area: NDArray[np.float64],
+    M1: NDArray[np.float64],
+    M2: NDArray[np.float64],
+    *cD: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`linear_norms_sq` of the components ``c0, c1, D00, D01, D10, D11``."""
     # written out component by component: much faster than einsum or sums over axes of
     # length 2 on many small matrices
-    c0, c1 = c[:, 0], c[:, 1]
-    a00, a01, a10, a11 = D[:, 0, 0], D[:, 0, 1], D[:, 1, 0], D[:, 1, 1]
+    c0, c1, a00, a01, a10, a11 = cD
     m0, m1 = M1[:, 0], M1[:, 1]
     s00, s01, s11 = M2[:, 0, 0], M2[:, 0, 1], M2[:, 1, 1]
     cDM1 = c0 * (a00 * m0 + a01 * m1) + c1 * (a10 * m0 + a11 * m1)
-    col0, col1, semi = _gradient_squares(area, D)
+    col0, col1, semi = _gradient_squares(area, a00, a01, a10, a11)
     quad = s00 * col0 + s11 * col1 + 2.0 * s01 * (a00 * a01 + a10 * a11)  # tr(D M2 D^T)
     l2 = area * (c0 * c0 + c1 * c1) + 2.0 * cDM1 + quad
     return np.maximum(l2, 0.0), semi
@@ -113,14 +129,15 @@ def linear_norms_sq(
 def linear_seminorms_sq(area: NDArray[np.float64], D: NDArray[np.float64]) -> NDArray[np.float64]:
     """The squared H1 seminorm per cell of ``c + D (x - xbar)``, ``|K| |D|_F^2``: the
     second part of :func:`linear_norms_sq` without the L2 part."""
-    return _gradient_squares(area, D)[2]
+    return _gradient_squares(area, *_entries(D))[2]
 
 
 def _gradient_squares(
-    area: NDArray[np.float64], D: NDArray[np.float64]
+    area: NDArray[np.float64], *D: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """The squared lengths of the columns of every ``D`` and ``|K| |D|_F^2``."""
-    a00, a01, a10, a11 = D[:, 0, 0], D[:, 0, 1], D[:, 1, 0], D[:, 1, 1]
+    """The squared lengths of the columns of every ``D`` (its entries ``D00, D01, D10,
+    D11``) and ``|K| |D|_F^2``."""
+    a00, a01, a10, a11 = D
     col0, col1 = a00 * a00 + a10 * a10, a01 * a01 + a11 * a11
     return col0, col1, area * (col0 + col1)
 
@@ -151,7 +168,8 @@ class ProjectedNorms:
         self, u: ArrayLike | LinearFields
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Squared L2 norm and squared H1 seminorm of ``Pi u`` on every cell (``u`` the dofs
-        or ``Pi u`` itself)."""
+        or ``Pi u`` itself; for a block of fields of :meth:`Projection.many
+        <vemwear.vem.projection.Projection.many>`, (fields, cells) arrays)."""
         f = u if isinstance(u, LinearFields) else self.projection(u)
         return linear_norms_sq(self.area, self.M1, self.M2, f.value, f.gradient)
 
@@ -206,7 +224,9 @@ def nested_difference_norms_sq(
     Parameters
     ----------
     coarse, fine : LinearFields
-        Linear fields per cell of the two meshes (e.g. ``Pi_h u_h`` and ``Pi_ref u_ref``).
+        Linear fields per cell of the two meshes (e.g. ``Pi_h u_h`` and ``Pi_ref u_ref``),
+        one each, or blocks of as many fields each (:meth:`Projection.many
+        <vemwear.vem.projection.Projection.many>`; then the results are (fields, cells)).
     cells : (n_fine_cells,) int array
         The coarse cell of every fine cell (:func:`vemwear.mesh.nested_cells`).
     moments : (area, M1, M2)
@@ -214,10 +234,21 @@ def nested_difference_norms_sq(
         :func:`~vemwear.vem.quadrature.polygon_moments`.
     """
     area, M1, M2 = moments
-    G = coarse.gradient[cells]
     dx = fine.xbar - coarse.xbar[cells]
-    c = coarse.value[cells] + G[:, :, 0] * dx[:, None, 0] + G[:, :, 1] * dx[:, None, 1] - fine.value
-    return linear_norms_sq(area, M1, M2, c, G - fine.gradient)
+    dx0, dx1 = dx[:, 0], dx[:, 1]
+
+    def at(x: NDArray[np.float64]) -> NDArray[np.float64]:  # coarse cell values -> fine cells
+        return np.take(x, cells, axis=-1)
+
+    # entry by entry (contiguous for the blocks of Projection.many): c_i = value_i +
+    # G_i0 dx_0 + G_i1 dx_1 - value_k,i and D_ij = G_ij - G_k,ij
+    G = [at(g) for g in _entries(coarse.gradient)]
+    c = [
+        at(coarse.value[..., i]) + G[2 * i] * dx0 + G[2 * i + 1] * dx1 - fine.value[..., i]
+        for i in range(2)
+    ]
+    D = [g - f for g, f in zip(G, _entries(fine.gradient), strict=True)]
+    return _norms_sq(area, M1, M2, *c, *D)
 
 
 def contact_l2_norm(
