@@ -156,6 +156,11 @@ class AdaptiveState:
     tree: CellTree
     wear: NDArray[np.float64]
 
+    @property
+    def completed(self) -> int:
+        """The number of finished levels (those before :attr:`first`)."""
+        return self.first
+
 
 def simulate_adaptive(
     problem: Problem,

@@ -1,0 +1,188 @@
+"""``vemwear run`` and ``run_config`` of an ``[adapt]`` configuration: result.h5 with one
+group per mesh (read back with h5py), the ParaView series on the hanging-node meshes
+(read back with meshio), summary.json, and a run killed by SIGKILL that resumes to the
+arrays of a run that never stopped, bitwise."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import signal
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import h5py
+import meshio
+import numpy as np
+import pytest
+
+from conftest import small_config
+from vemwear import run_config
+from vemwear.config import load_config
+from vemwear.runner import ResumeError
+from vemwear.simulate.adaptive_time import simulate_adaptive
+
+ADAPT = "[adapt]\nevery = 2\nmax_cells = 200\ncoarsen = true\n"
+ROWS = ("wear", "u_nu", "p_rigid", "p_soft", "penetration", "iterations", "residuals", "u")
+
+
+def _config(tmp_path: Path, steps: int = 8, figures: bool = False, adapt: str = ADAPT) -> Path:
+    out = {"times": [0.5, 1.0], "figures": figures, "vtk": figures}
+    p = tmp_path / "case.toml"
+    p.write_text(small_config("adaptive", steps=steps, output=out) + adapt)
+    return p
+
+
+def _groups(path: Path) -> dict[str, dict[str, np.ndarray]]:
+    with h5py.File(path, "r") as f:
+        names = [n for n in sorted(f) if n.startswith("mesh_")]
+        return {n: {k: np.asarray(f[n][k][()]) for k in f[n]} for n in names}
+
+
+def test_the_cli_writes_every_mesh_with_its_levels(tmp_path: Path) -> None:
+    config = _config(tmp_path, figures=True)
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "vemwear", "run", str(config), "-o", str(out), "--no-progress"]
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "adaptive: done" in done.stdout and "meshes" in done.stdout
+    groups = _groups(out / "result.h5")
+    with h5py.File(out / "result.h5", "r") as f:
+        t = f["t"][()]
+        first, last = f["segment_first"][()], f["segment_last"][()]
+        assert int(f["completed"][()]) == len(t) == 9
+    # the meshes own the levels 0 .. 8 once each, in order
+    owned = np.concatenate([g["levels"] for g in groups.values()])
+    assert np.array_equal(owned, np.arange(9))
+    assert np.array_equal(first, [g["first"] for g in groups.values()])
+    assert np.array_equal(last, [g["last"] for g in groups.values()])
+    summary = json.loads((out / "summary.json").read_text())
+    meshes = summary["adaptive"]["meshes"]
+    assert len(meshes) == len(groups) >= 3 and summary["partial"] is False
+    assert meshes[-1]["cells"] > meshes[0]["cells"] == 32
+    for m, (name, g) in zip(meshes, groups.items(), strict=True):
+        assert m["group"] == name and m["cells"] == len(g["cells_offsets"]) - 1
+        assert m["dofs"] == 2 * len(g["points"]) and m["contact_nodes"] == len(g["contact_nodes"])
+        assert g["wear"].shape == (len(g["levels"]), len(g["contact_nodes"]))
+        assert g["u"].shape == (len(g["levels"]), len(g["points"]), 2)
+        assert np.array_equal(g["t"], t[g["levels"]])
+        assert len(g["tree_level"]) == m["cells"] and g["eta_jump"].shape == (m["cells"],)
+    # every level in ParaView, on the mesh that computed it; hanging nodes as polygon vertices
+    pvd = out / "solution.pvd"
+    files = [d.get("file") for d in ET.parse(pvd).iter("DataSet")]
+    assert len(files) == 9
+    for g in groups.values():
+        for lv, row in ((g["levels"][0], 0), (g["levels"][-1], len(g["levels"]) - 1)):
+            m = meshio.read(out / files[lv])
+            assert np.array_equal(m.points[:, :2], g["points"])
+            conn = np.concatenate([c.data.ravel() for c in m.cells])
+            assert np.array_equal(np.sort(conn), np.sort(g["cells_vertices"]))
+            wear = m.point_data["wear"]
+            assert np.array_equal(wear[g["contact_nodes"]], g["wear"][row])
+    last_vtu = meshio.read(out / files[-1])
+    sizes = [c.data.shape[1] for c in last_vtu.cells if c.type == "polygon"]
+    assert sizes and max(sizes) > 4  # squares with hanging nodes on their sides
+    for name in ("contact_profiles.png", "meshes.png"):
+        assert (out / name).stat().st_size > 10_000
+    marker = json.loads((out / ".vemwear").read_text())
+    assert marker["state"] == "complete" and not (out / "checkpoint.npz").exists()
+
+
+def test_run_config_gives_the_arrays_of_simulate_adaptive(tmp_path: Path) -> None:
+    config = _config(tmp_path)
+    outcome = run_config(config, tmp_path / "out", progress=False)
+    assert outcome.result is None and outcome.segments is not None
+    cfg = load_config(config)
+    assert cfg.adapt is not None
+    ref = simulate_adaptive(cfg.problem, **dataclasses.asdict(cfg.adapt), solver=cfg.solver)
+    groups = list(_groups(tmp_path / "out" / "result.h5").values())
+    assert len(groups) == len(ref) == len(outcome.segments)
+    for k, (g, seg, got) in enumerate(zip(groups, ref, outcome.segments, strict=True)):
+        rows = np.arange(seg.first, seg.last + (k == len(ref) - 1))
+        assert np.array_equal(g["points"], seg.problem.mesh.points)
+        assert np.array_equal(g["tree_level"], seg.tree.level)
+        for name in ROWS:
+            if name == "u":
+                mine = np.stack([seg.result.displacement(lv) for lv in rows])
+            else:
+                mine = getattr(seg.result, name)[rows]
+            assert np.array_equal(g[name], mine), name
+            assert np.array_equal(getattr(got.result, name), mine), name
+        assert got.estimate.total == seg.estimate.total
+
+
+def test_target_error_stops_the_refinement(tmp_path: Path) -> None:
+    loose = _config(tmp_path, adapt="[adapt]\nevery = 2\ntarget_error = 1.0\n")
+    outcome = run_config(loose, tmp_path / "out", progress=False)
+    assert outcome.segments is not None
+    assert {s.problem.mesh.n_cells for s in outcome.segments} == {32}  # eta < 1 already
+
+
+# ---------------------------------------------------------------------------- resume
+KILL_STEPS = 32  # 16 mesh changes, about 0.1 s each
+
+
+def _cli(config: Path, out: Path, *extra: str) -> list[str]:
+    cmd = [sys.executable, "-m", "vemwear", "run", str(config), "-o", str(out), "--no-progress"]
+    return [*cmd, *extra]
+
+
+def test_sigkill_after_a_mesh_change_resumes_bitwise(tmp_path: Path) -> None:
+    config = _config(tmp_path, steps=KILL_STEPS, adapt=ADAPT.replace("200", "120"))
+    ref_out = tmp_path / "ref"
+    run_config(config, ref_out, progress=False)
+    reference = _groups(ref_out / "result.h5")
+    out = tmp_path / "out"
+    proc = subprocess.Popen(_cli(config, out), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    t0 = time.monotonic()
+    while _segments_done(out) < 3:  # past the third mesh change, in the middle of the run
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() - t0 < 60, "no checkpoint"
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    assert proc.returncode == -signal.SIGKILL
+    done = _segments_done(out)
+    assert 3 <= done < len(reference)
+    assert json.loads((out / ".vemwear").read_text())["state"] == "running"
+    with pytest.raises(ResumeError, match=r"holds a stopped run .* --resume"):
+        run_config(config, out, progress=False)
+    resumed = subprocess.run(_cli(config, out, "--resume"), capture_output=True, text=True)
+    assert resumed.returncode == 0, resumed.stderr
+    assert "resumed from level" in resumed.stdout
+    got = _groups(out / "result.h5")
+    assert got.keys() == reference.keys()
+    for name, g in reference.items():
+        assert got[name].keys() == g.keys()
+        for k, v in g.items():
+            assert got[name][k].dtype == v.dtype and np.array_equal(got[name][k], v), (name, k)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["resumed_from_level"] == 2 * done
+    assert not (out / "checkpoint.npz").exists()
+
+
+def _segments_done(out: Path) -> int:
+    try:
+        with np.load(out / "checkpoint.npz") as z:
+            return int(json.loads(str(z["meta"]))["segment"])
+    except (OSError, ValueError, KeyError):
+        return 0
+
+
+def test_resume_refuses_other_adapt_settings(tmp_path: Path) -> None:
+    config = _config(tmp_path, steps=KILL_STEPS)
+    out = tmp_path / "out"
+    proc = subprocess.Popen(_cli(config, out), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    t0 = time.monotonic()
+    while _segments_done(out) < 1:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() - t0 < 60, "no checkpoint"
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    config.write_text(config.read_text().replace("max_cells = 200", "max_cells = 150"))
+    with pytest.raises(ResumeError, match=r"--resume refused: .* other \[adapt\] settings"):
+        run_config(config, out, resume=True, progress=False)
