@@ -186,3 +186,31 @@ def test_resume_refuses_other_adapt_settings(tmp_path: Path) -> None:
     config.write_text(config.read_text().replace("max_cells = 200", "max_cells = 150"))
     with pytest.raises(ResumeError, match=r"--resume refused: .* other \[adapt\] settings"):
         run_config(config, out, resume=True, progress=False)
+
+
+def test_the_shipped_example_refines_at_the_clamped_corners(tmp_path: Path) -> None:
+    from vemwear.examples import config_path
+    from vemwear.mesh.locate import locate_cells
+    from vemwear.simulate import simulate
+
+    config = config_path("example_5_2_adaptive")
+    out = tmp_path / "out"
+    done = subprocess.run(_cli(config, out), capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    meshes = summary["adaptive"]["meshes"]
+    assert [m["first"] for m in meshes] == [0, 4, 8, 12] and meshes[-1]["last"] == 16
+    assert meshes[0]["cells"] == 128 < meshes[-1]["cells"] <= 600
+    groups = _groups(out / "result.h5")
+    last = groups[meshes[-1]["group"]]
+    from vemwear.post.results import mesh_from_arrays
+
+    mesh = mesh_from_arrays(last)
+    corner, middle = locate_cells(mesh, np.array([[0.01, 0.01], [1.5, 0.5]]))
+    assert last["tree_level"][corner] == 3 and last["tree_level"][middle] == 0
+    # the wear agrees with the run on the initial mesh to a few percent
+    cfg = load_config(config)
+    plain = simulate(cfg.problem, cfg.solver, store="final")
+    w_plain, w_adapt = plain.wear[-1].max(), last["wear"][-1].max()
+    assert abs(w_adapt - w_plain) < 0.03 * w_plain
+    assert summary["outputs"]["wear_max_final"] == w_adapt
