@@ -214,3 +214,35 @@ def test_the_shipped_example_refines_at_the_clamped_corners(tmp_path: Path) -> N
     w_plain, w_adapt = plain.wear[-1].max(), last["wear"][-1].max()
     assert abs(w_adapt - w_plain) < 0.03 * w_plain
     assert summary["outputs"]["wear_max_final"] == w_adapt
+
+
+def test_a_study_of_adaptive_runs(tmp_path: Path) -> None:
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("distributed")
+    from vemwear.studies import sweep
+
+    (tmp_path / "case.toml").write_text(_config(tmp_path).read_text())
+    study = tmp_path / "study.toml"
+    study.write_text(
+        'base = "case.toml"\n[axes]\n"contact.kappa" = [1.0, 4.0]\n'
+        '[overrides]\n"output.figures" = false\n'
+    )
+    out = tmp_path / "study"
+    ds = sweep(study, out, workers=1, progress=False, figures=False)
+    assert ds.attrs["runs_computed"] == 2 and ds.attrs["runs_failed"] == 0
+    back = xr.open_dataset(out / "study.nc", engine="h5netcdf")
+    mw = back["max_wear"].values
+    assert mw[1] > mw[0] > 0  # more wear with a larger kappa
+    for i, rid in enumerate(back["run_id"].values):
+        groups = list(_groups(out / "runs" / str(rid) / "result.h5").values())
+        last = groups[-1]
+        assert mw[i] == last["wear"][-1].max()
+        assert np.isclose(back["worn_volume"].values[i], last["contact_weights"] @ last["wear"][-1])
+        assert back["max_p_soft"].values[i] == max(g["p_soft"].max() for g in groups)
+        # the final profile is the final mesh's piecewise linear wear
+        profile = back["wear"].isel(contact_kappa=i, time=-1).values
+        s = back["s"].values
+        inside = (s >= last["contact_s"][0]) & (s <= last["contact_s"][-1])
+        want = np.interp(s[inside], last["contact_s"], last["wear"][-1])
+        assert np.allclose(profile[inside], want, rtol=0, atol=1e-14)
+    back.close()

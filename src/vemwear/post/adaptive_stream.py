@@ -20,6 +20,8 @@ TERMS`). The file itself holds ``t`` (every level of the run), ``format``,
 
 :func:`read_adaptive` rebuilds the segments of a complete file for a problem (the
 outputs of a resumed run are written from it, as those of a run that never stopped).
+:func:`contact_arrays` puts the contact arrays of every level on one set of points, the
+contact nodes of all the meshes (the arrays a study's Dataset takes from a run).
 """
 
 from __future__ import annotations
@@ -35,10 +37,19 @@ from numpy.typing import NDArray
 from .results import FORMAT, mesh_from_arrays, result_from_arrays, static_arrays
 
 if TYPE_CHECKING:
+    from ..mesh.polymesh import Mesh
     from ..simulate import Problem
     from ..simulate.adaptive_time import Segment
 
-__all__ = ["AdaptiveH5", "group_name", "read_adaptive", "segment_arrays"]
+__all__ = [
+    "AdaptiveH5",
+    "contact_arrays",
+    "group_name",
+    "is_adaptive",
+    "read_adaptive",
+    "read_groups",
+    "segment_arrays",
+]
 
 _TREE = ("level", "family", "parent_family", "born")
 
@@ -181,6 +192,94 @@ class AdaptiveH5:
 def _read_group(g: Any) -> dict[str, NDArray[Any]]:
     out = {k: np.asarray(g[k][()]) for k in g}
     return {k: np.char.decode(v, "utf-8") if v.dtype.kind == "S" else v for k, v in out.items()}
+
+
+def is_adaptive(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path`` is the ``result.h5`` of an adaptive run (complete or not)."""
+    try:
+        with _h5py().File(path, "r") as f:
+            return "adaptive" in f
+    except OSError:
+        return False
+
+
+def read_groups(path: str | os.PathLike[str]) -> list[dict[str, NDArray[Any]]]:
+    """The arrays of every group of an adaptive ``result.h5``, in order."""
+    with _h5py().File(path, "r") as f:
+        return [_read_group(f[n]) for n in sorted(n for n in f if n.startswith("mesh_"))]
+
+
+def contact_arrays(groups: list[dict[str, NDArray[Any]]]) -> dict[str, NDArray[Any]]:
+    """The contact arrays of every level of an adaptive run on one set of points.
+
+    The points are the contact nodes of all the meshes (merged along the arc length
+    ``contact_s``), and the values of a level there are those of its mesh, piecewise
+    linear along Gamma_C (:func:`~vemwear.contact.transfer.transfer_along_contact`: exact
+    at every node of that mesh, 0 at a clamped end), so the profiles of every level are
+    kept whole. ``contact_weights`` are those of the final mesh at its nodes (0 at the
+    other points): the dot product with the final wear is its worn volume.
+
+    Parameters
+    ----------
+    groups : list of dict
+        The groups of ``result.h5`` (:func:`read_groups`, :func:`segment_arrays`).
+
+    Raises
+    ------
+    ValueError
+        With several contact parts (their arc lengths do not make one line).
+    """
+    from ..contact.transfer import transfer_along_contact
+
+    last = groups[-1]
+    parts = tuple(str(p) for p in np.atleast_1d(last["contact_part_names"]))
+    if len(parts) != 1 or any(not np.all(np.diff(g["contact_s"]) > 0) for g in groups):
+        raise ValueError(
+            "the contact arrays of an adaptive run are put on one line of points along one "
+            f"contact part; this run has {len(parts)} ({', '.join(parts)})"
+        )
+    s_all = np.concatenate([g["contact_s"] for g in groups])
+    X_all = np.concatenate([g["contact_points"] for g in groups])
+    order = np.argsort(s_all, kind="stable")
+    s_all, X_all = s_all[order], X_all[order]
+    tol = 1e-9 * max(float(s_all[-1] - s_all[0]), 1e-300)
+    keep = np.concatenate([[True], np.diff(s_all) > tol])
+    s, X = s_all[keep], X_all[keep]
+    out: dict[str, NDArray[Any]] = {
+        "t": np.concatenate([g["t"] for g in groups]),
+        "levels": np.concatenate([g["levels"] for g in groups]),
+        "contact_s": s,
+        "contact_points": X,
+        "contact_part": np.zeros(len(s), dtype=np.int64),
+        "contact_part_names": np.array(parts, dtype=str),
+    }
+    meshes = [_mesh2d(g) for g in groups]
+    for name in ("wear", "u_nu", "penetration", "p_rigid", "p_soft"):
+        out[name] = np.array(
+            [
+                transfer_along_contact(m, g["contact_nodes"], row, X, parts)
+                for m, g in zip(meshes, groups, strict=True)
+                for row in g[name]
+            ]
+        )
+    for name in ("iterations", "residuals", "forces"):
+        if all(name in g for g in groups):
+            out[name] = np.concatenate([g[name] for g in groups])
+    weights = np.zeros(len(s))
+    weights[np.searchsorted(s, last["contact_s"] - tol)] = last["contact_weights"]
+    out["contact_weights"] = weights
+    for name in ("force_parts", "force_kinds", "residual_names", "format", "vemwear_version"):
+        if name in last:
+            out[name] = last[name]
+    return out
+
+
+def _mesh2d(data: dict[str, NDArray[Any]]) -> Mesh:
+    from ..mesh.polymesh import Mesh
+
+    mesh = mesh_from_arrays(data)
+    assert isinstance(mesh, Mesh)  # adaptive runs are 2D
+    return mesh
 
 
 def read_adaptive(
