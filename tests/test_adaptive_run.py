@@ -6,6 +6,7 @@ arrays of a run that never stopped, bitwise."""
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import signal
 import subprocess
@@ -29,8 +30,10 @@ ADAPT = "[adapt]\nevery = 2\nmax_cells = 200\ncoarsen = true\n"
 ROWS = ("wear", "u_nu", "p_rigid", "p_soft", "penetration", "iterations", "residuals", "u")
 
 
-def _config(tmp_path: Path, steps: int = 8, figures: bool = False, adapt: str = ADAPT) -> Path:
-    out = {"times": [0.5, 1.0], "figures": figures, "vtk": figures}
+def _config(
+    tmp_path: Path, steps: int = 8, figures: bool = False, adapt: str = ADAPT, paraview: str = "pvd"
+) -> Path:
+    out = {"times": [0.5, 1.0], "figures": figures, "vtk": figures, "paraview": paraview}
     p = tmp_path / "case.toml"
     p.write_text(small_config("adaptive", steps=steps, output=out) + adapt)
     return p
@@ -214,6 +217,41 @@ def test_the_shipped_example_refines_at_the_clamped_corners(tmp_path: Path) -> N
     w_plain, w_adapt = plain.wear[-1].max(), last["wear"][-1].max()
     assert abs(w_adapt - w_plain) < 0.03 * w_plain
     assert summary["outputs"]["wear_max_final"] == w_adapt
+    # the XDMF series: every mesh once, every level's grid on its mesh
+    root = ET.parse(out / "solution.xdmf").getroot()
+    grids = list(root.iter("Grid"))[1:]
+    assert len(grids) == 17
+    with h5py.File(out / "solution.h5", "r") as f:
+        assert sorted(n for n in f if n.startswith("mesh_")) == sorted(groups)
+        for lv, grid in enumerate(grids):
+            m = next(mm for mm in meshes if mm["owns_levels"][0] <= lv <= mm["owns_levels"][1])
+            g = groups[m["group"]]
+            assert float(grid.find("Time").get("Value")) == lv / 16
+            topo_path = grid.find("Topology/DataItem").text.split(":")[1]
+            assert topo_path == f"/{m['group']}/topology"
+            cells = _decode(f[topo_path][()])
+            off = g["cells_offsets"]
+            assert cells == [g["cells_vertices"][a:b].tolist() for a, b in itertools.pairwise(off)]
+            attrs = {
+                a.get("Name"): a.find("DataItem").text.split(":")[1] for a in grid.iter("Attribute")
+            }
+            row = lv - m["owns_levels"][0]
+            assert np.array_equal(f[attrs["wear"]][()][g["contact_nodes"]], g["wear"][row])
+            assert np.array_equal(f[attrs["level"]][()], g["tree_level"])
+        assert max(len(c) for c in cells) > 4  # hanging nodes
+
+
+def _decode(topo: np.ndarray) -> list[list[int]]:
+    """Cells of an XDMF Mixed topology (triangles 4, quads 5, polygons 3 with a count)."""
+    cells, i = [], 0
+    while i < len(topo):
+        kind = int(topo[i])
+        n = {4: 3, 5: 4}.get(kind)
+        if n is None:
+            n, i = int(topo[i + 1]), i + 1
+        cells.append(topo[i + 1 : i + 1 + n].tolist())
+        i += 1 + n
+    return cells
 
 
 def test_a_study_of_adaptive_runs(tmp_path: Path) -> None:

@@ -6,8 +6,7 @@
 :func:`~vemwear.simulate.adaptive_time.simulate_adaptive` and refuses, before anything
 is solved, the settings that contradict each other or that the adaptive path cannot
 honour (a 3D mesh or k = 2, for which the residual estimator is not implemented; a
-cycle-jump run; stored levels it does not keep; an XDMF series, which holds one mesh),
-each in one line naming the key.
+cycle-jump run; stored levels it does not keep), each in one line naming the key.
 """
 
 from __future__ import annotations
@@ -131,11 +130,6 @@ def check_adapt_output(src: str, raw: Mapping[str, Any]) -> None:
         raise ConfigError(
             f"{src}: [time] cycle_jump does not go with [adapt] (a cycle-jump run keeps one "
             "mesh); remove one of them"
-        )
-    if out.get("paraview") == "xdmf":
-        raise ConfigError(
-            f"{src}: [output] paraview = 'xdmf' holds one mesh, but an [adapt] run changes its "
-            "mesh; use 'pvd' (the series of adaptive runs: one .vtu per level on its mesh)"
         )
     for key in ("store_u", "every"):
         if key in out:

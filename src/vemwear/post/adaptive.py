@@ -10,6 +10,11 @@ A segment's levels are found among the rows its result keeps (all levels up to i
 in memory, the owned ones when read back from ``result.h5``:
 :func:`~vemwear.post.adaptive_stream.read_adaptive`).
 
+:func:`write_adaptive_xdmf` writes the same levels as one XDMF series
+(``<name>.xdmf`` + ``<name>.h5``, :func:`~vemwear.post.xdmf.write_xdmf_meshes`): every
+mesh once, hanging nodes as vertices of its polygons (the ``Mixed`` topology), with the
+cell data ``level``, and every level's grid on its mesh.
+
 :func:`plot_adaptive_profiles` draws the wear and the pressure along Gamma_C at some
 times, each on the contact nodes of the mesh of its level, and :func:`plot_meshes` the
 first and the last mesh.
@@ -37,6 +42,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "FIGURE_NAMES",
+    "owned_rows",
     "owner",
     "plot_adaptive_profiles",
     "plot_meshes",
@@ -46,6 +52,38 @@ __all__ = [
 
 #: The figures of an adaptive run.
 FIGURE_NAMES = {"contact_profiles": "contact_profiles.png", "meshes": "meshes.png"}
+
+
+def owned_rows(segments: list[Segment]) -> list[list[int]]:
+    """For every segment, the rows of its result that hold the levels it owns."""
+    out = []
+    for k, seg in enumerate(segments):
+        levels = seg.result.levels
+        assert levels is not None
+        own = np.arange(seg.first, seg.last + 1 if k == len(segments) - 1 else seg.last)
+        out.append([int(r) for r in np.searchsorted(levels, own)])
+    return out
+
+
+def write_adaptive_xdmf(
+    segments: list[Segment], outdir: str | os.PathLike[str], name: str = "solution"
+) -> Path:
+    """Write the levels of an adaptive run as one XDMF series (module docstring).
+
+    Returns
+    -------
+    Path
+        The ``.xdmf`` file.
+    """
+    from .xdmf import write_xdmf_meshes
+
+    if not segments:
+        raise ValueError("xdmf: an adaptive run without segments")
+    parts = [
+        (seg.result, rows, {"level": seg.tree.level.astype(np.float64)})
+        for seg, rows in zip(segments, owned_rows(segments), strict=True)
+    ]
+    return write_xdmf_meshes(parts, outdir, name)
 
 
 def owner(segments: list[Segment], level: int) -> tuple[Segment, int]:

@@ -12,9 +12,11 @@ same arrays, bitwise: the outputs of every run are written from ``result.h5`` re
 When the run completes, OUTDIR gets ``summary.json`` (with ``"adaptive"``: the settings
 and, per mesh, its cells, dofs, contact nodes, owned levels and estimate), the figures
 ``contact_profiles.png`` (wear and pressure along Gamma_C at ``[output] times``, each on
-its mesh) and ``meshes.png`` (the first and the last mesh), and the ParaView series
-``solution.pvd`` + ``solution/*.vtu`` (:func:`~vemwear.post.adaptive.
-write_adaptive_series`: every level on its mesh, hanging nodes as polygon vertices).
+its mesh) and ``meshes.png`` (the first and the last mesh), and the ParaView series:
+``solution.xdmf`` + ``solution.h5`` (:func:`~vemwear.post.adaptive.write_adaptive_xdmf`:
+every mesh once) or, with ``[output] paraview = "pvd"``, ``solution.pvd`` +
+``solution/*.vtu`` (:func:`~vemwear.post.adaptive.write_adaptive_series`), every level
+on its mesh, hanging nodes as vertices of their polygons.
 """
 
 from __future__ import annotations
@@ -162,6 +164,7 @@ def _finish(plan: RunPlan) -> list[Segment]:
         plot_adaptive_profiles,
         plot_meshes,
         write_adaptive_series,
+        write_adaptive_xdmf,
     )
     from ..post.adaptive_stream import read_adaptive
     from ..post.outputs import _use_agg
@@ -178,7 +181,10 @@ def _finish(plan: RunPlan) -> list[Segment]:
         plot_adaptive_profiles(segments, times, out / FIGURE_NAMES["contact_profiles"])
         plot_meshes(segments, out / FIGURE_NAMES["meshes"])
         files += list(FIGURE_NAMES.values())
-    if cfg.output.vtk:
+    if cfg.output.vtk and cfg.output.paraview == "xdmf":
+        xdmf = write_adaptive_xdmf(segments, out, name=_SERIES)
+        files += [xdmf.name, xdmf.with_suffix(".h5").name]
+    elif cfg.output.vtk:
         pvd = write_adaptive_series(segments, out, name=_SERIES)
         files += [pvd.name, _SERIES]
     summary = {
