@@ -115,6 +115,10 @@ def test_run_config_gives_the_arrays_of_simulate_adaptive(tmp_path: Path) -> Non
             assert np.array_equal(g[name], mine), name
             assert np.array_equal(getattr(got.result, name), mine), name
         assert got.estimate.total == seg.estimate.total
+    from vemwear.post.stream import export_npz
+
+    with pytest.raises(ValueError, match=r"holds an \[adapt\] run, one group per mesh"):
+        export_npz(tmp_path / "out")
 
 
 def test_target_error_stops_the_refinement(tmp_path: Path) -> None:
@@ -284,3 +288,26 @@ def test_a_study_of_adaptive_runs(tmp_path: Path) -> None:
         want = np.interp(s[inside], last["contact_s"], last["wear"][-1])
         assert np.allclose(profile[inside], want, rtol=0, atol=1e-14)
     back.close()
+
+
+def test_sigterm_keeps_the_finished_meshes_and_says_how_to_resume(tmp_path: Path) -> None:
+    config = _config(tmp_path, steps=KILL_STEPS)
+    out = tmp_path / "out"
+    proc = subprocess.Popen(_cli(config, out), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    t0 = time.monotonic()
+    while _segments_done(out) < 2:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() - t0 < 60, "no checkpoint"
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    done = _segments_done(out)
+    assert f"continue with: vemwear run {config}" in err.decode() and "--resume" in err.decode()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["partial"] is True and summary["completed"] == 2 * done
+    assert "terminated (SIGTERM)" in (out / "PARTIAL.txt").read_text()
+    assert len(_groups(out / "result.h5")) >= done  # the finished meshes are kept
+    outcome = run_config(config, out, resume=True, progress=False)
+    assert outcome.resumed_from == 2 * done and outcome.segments is not None
+    assert outcome.segments[-1].last == KILL_STEPS and not (out / "PARTIAL.txt").exists()
