@@ -72,3 +72,12 @@ def test_a_3d_mesh_is_refused() -> None:
     data["adapt"] = {"every": 2, "max_cells": 100}
     with pytest.raises(ConfigError, match=r"\[adapt\] .* 2D meshes; \[mesh\] is 3D"):
         parse_config(data, source="case.toml")
+
+
+def test_the_plan_counts_every_level_on_the_largest_mesh() -> None:
+    from vemwear.runner.plan import estimate_config
+
+    plain = estimate_config(parse_config(_config(None, output={"times": [1.0]})))
+    adaptive = estimate_config(parse_config(_config({"every": 2, "max_cells": 320})))
+    bounded = estimate_config(parse_config(_config({"every": 2, "target_error": 1.0})))
+    assert adaptive.disk > bounded.disk > plain.disk
