@@ -14,8 +14,9 @@ run is checked, so that every refusal is as cheap as it can be:
    (:func:`vemwear.runner.run.prepare_run`);
 6. the warnings (stale temporaries, smallness of Theorem 3.4, overshooting wear steps)
    and the plan's line are said;
-7. the levels are solved (or the cycles jumped: ``[time] cycle_jump``) and the outputs
-   written.
+7. the levels are solved (or the cycles jumped: ``[time] cycle_jump``; or the mesh
+   adapted every few levels: ``[adapt]``, :mod:`vemwear.runner.adaptive`) and the
+   outputs written.
 """
 
 from __future__ import annotations
