@@ -41,17 +41,12 @@ if TYPE_CHECKING:
     from ..simulate.adaptive_time import Segment
 
 __all__ = [
-    "FIGURE_NAMES",
     "owned_rows",
     "owner",
     "plot_adaptive_profiles",
     "plot_meshes",
     "write_adaptive_series",
 ]
-
-
-#: The figures of an adaptive run.
-FIGURE_NAMES = {"contact_profiles": "contact_profiles.png", "meshes": "meshes.png"}
 
 
 def owned_rows(segments: list[Segment]) -> list[list[int]]:

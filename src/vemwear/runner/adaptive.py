@@ -160,13 +160,13 @@ def _stop(plan: RunPlan, h5: Any, state: AdaptiveState | None, exc: BaseExceptio
 def _finish(plan: RunPlan) -> list[Segment]:
     """The standard files of a completed adaptive run, from ``result.h5``."""
     from ..post.adaptive import (
-        FIGURE_NAMES,
         plot_adaptive_profiles,
         plot_meshes,
         write_adaptive_series,
         write_adaptive_xdmf,
     )
     from ..post.adaptive_stream import read_adaptive
+    from ..post.outputs import FIGURE_NAMES_ADAPTIVE as FIGURE_NAMES
     from ..post.outputs import _use_agg
     from ..post.results import FORMAT, SUMMARY_NAME, jsonable
     from ..post.stream import STREAM_NAME

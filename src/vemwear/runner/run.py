@@ -95,13 +95,12 @@ class RunComplete(Exception):
 def output_names() -> list[str]:
     """Every top-level name a run may write into its output directory (a user's file of
     one of these names is never overwritten: ``--force`` refuses)."""
-    from ..post.adaptive import FIGURE_NAMES as ADAPTIVE_FIGURES
-    from ..post.outputs import FIGURE_NAMES, FIGURE_NAMES_3D
+    from ..post.outputs import FIGURE_NAMES, FIGURE_NAMES_3D, FIGURE_NAMES_ADAPTIVE
     from ..post.results import NPZ_NAME, SUMMARY_NAME
     from ..post.stream import STREAM_NAME
 
     series = ["solution.xdmf", "solution.h5", "solution.pvd", "solution"]
-    figures = [*FIGURE_NAMES.values(), *FIGURE_NAMES_3D.values(), *ADAPTIVE_FIGURES.values()]
+    figures = [*FIGURE_NAMES.values(), *FIGURE_NAMES_3D.values(), *FIGURE_NAMES_ADAPTIVE.values()]
     names = {STREAM_NAME, CHECKPOINT_NAME, PARTIAL_NAME, SUMMARY_NAME, NPZ_NAME}
     return sorted({*names, *figures, *series})
 
