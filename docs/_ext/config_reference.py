@@ -40,6 +40,7 @@ SECTIONS: tuple[tuple[str, str, str], ...] = (
     ("time.cycle_jump", "`[time] cycle_jump`", "Cycle jumps of a periodic history."),
     ("solver", "`[solver]`", "The step solver."),
     ("output", "`[output]`", "What a run writes."),
+    ("adapt", "`[adapt]`", "Adaptive meshes in time: the estimator, marking and mesh changes."),
 )
 
 

@@ -105,6 +105,13 @@ def cmd_run(args: argparse.Namespace) -> int:
     if outcome.rank != 0:  # an MPI rank that served rank 0's solves: rank 0 reports
         return EXIT_OK
     title, result, cres = outcome.title, outcome.result, outcome.cycles
+    elapsed = ("time", f"{time.perf_counter() - t0:.2f} s")
+    if outcome.segments is not None:
+        text = f"{PROG}: {title}: done\n" + rows_text(_adaptive_rows(outcome, elapsed))
+        if outcome.resumed_from is not None:
+            text += f"\n  resumed from level {outcome.resumed_from}"
+        print(text)
+        return EXIT_OK
     if result is None and cres is None:  # complete already, or result.h5 alone
         if outcome.config is None or (
             outcome.resumed_from is None and "result.h5" not in (outcome.note)
@@ -113,7 +120,6 @@ def cmd_run(args: argparse.Namespace) -> int:
         else:
             print(f"{PROG}: {title}: done; {outcome.note}")
         return EXIT_OK
-    elapsed = ("time", f"{time.perf_counter() - t0:.2f} s")
     if result is None:  # a cycle-jump run
         assert cres is not None and outcome.config is not None
         print(f"{PROG}: {title}: done\n" + rows_text(_cycle_rows(outcome, elapsed)))
@@ -124,6 +130,22 @@ def cmd_run(args: argparse.Namespace) -> int:
         text += f"\n  resumed from level {outcome.resumed_from}"
     print(text)
     return EXIT_OK
+
+
+def _adaptive_rows(outcome: Any, elapsed: tuple[str, str]) -> list[tuple[str, str]]:
+    """The summary rows of an ``[adapt]`` run."""
+    segs = outcome.segments
+    last = segs[-1]
+    cells = [s.problem.mesh.n_cells for s in segs]
+    return [
+        ("time levels", str(len(outcome.config.problem.time.t))),
+        ("meshes", f"{len(segs)}, {min(cells)} to {max(cells)} cells"),
+        ("final mesh", f"{cells[-1]} cells, {last.problem.space.n_dofs} dofs"),
+        ("estimate", f"eta = {last.estimate.total:.4g} at the final level"),
+        ("max wear", f"{float(last.result.wear[-1].max(initial=0.0)):.6g}"),
+        elapsed,
+        ("output", str(outcome.out)),
+    ]
 
 
 def _cycle_rows(outcome: Any, elapsed: tuple[str, str]) -> list[tuple[str, str]]:

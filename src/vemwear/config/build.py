@@ -34,10 +34,12 @@ from ..mesh.boundary3d import select_parts3d
 from ..mesh.io3d import mesh_file_dim, read_mesh3d
 from ..mesh.polyhedra import Mesh3D
 from ..simulate import Problem, SolverOptions, TimeGrid
+from ..simulate.adaptive_time import AdaptSettings
 from ..simulate.cycles import CycleJump
 from ..solvers import resolve_backend
 from ..vem import Material
 from . import schema as s
+from .adapt import adapt_settings, check_adapt_output
 from .checks import check_dims, check_loads, check_scales, check_velocity
 from .errors import ConfigError, at, from_library, from_validation
 from .fields import FieldExpression, library_data, velocity_data
@@ -85,6 +87,8 @@ class Config:
         The validated schema model.
     cycles : CycleJump or None
         ``[time] cycle_jump``: the grid is one cycle of a periodic loading.
+    adapt : AdaptSettings or None
+        ``[adapt]``: the mesh changes every few levels (:mod:`vemwear.config.adapt`).
     """
 
     path: Path | None
@@ -96,6 +100,7 @@ class Config:
     mesh_source: dict[str, Any] = field(default_factory=dict)
     model: s.ConfigFile | None = None
     cycles: CycleJump | None = None
+    adapt: AdaptSettings | None = None
 
 
 @dataclass(frozen=True)
@@ -445,8 +450,15 @@ def parse_config(
         solver = SolverOptions(sol.method, sol.tol, sol.max_iter, sol.backend)
         resolve_backend(sol.backend)
 
+    if c.adapt is not None:
+        check_adapt_output(src, raw)
     mesh, mesh_source = _mesh(src, c.mesh, raw["mesh"], Path(base_dir))
-    check_dims(src, c, raw, 3 if isinstance(mesh, Mesh3D) else 2)
+    dim = 3 if isinstance(mesh, Mesh3D) else 2
+    adapt = None
+    if c.adapt is not None:
+        kw = {"dim": dim, "order": c.vem.order, "n_cells": mesh.n_cells}
+        adapt = adapt_settings(src, c.adapt, raw, **kw)
+    check_dims(src, c, raw, dim)
     check_scales(src, mesh, c)
     if parts.selectors:
         with at(src, "[boundary]", raw.get("boundary", {})):
@@ -484,4 +496,4 @@ def parse_config(
             )
         with at(src, "[time]", raw["time"], key="cycle_jump"):
             cycles = CycleJump(cj.cycles, cj.jump, cj.max_increment)
-    return Config(path, raw, title, problem, solver, output, mesh_source, c, cycles)
+    return Config(path, raw, title, problem, solver, output, mesh_source, c, cycles, adapt)

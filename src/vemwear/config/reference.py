@@ -132,7 +132,7 @@ def reference_tables() -> dict[str, str]:
         "boundary.traction": _table(head, _rows(s.TractionPart)),
         "boundary.rigid": _table(head, _rows(s.RigidPartTable)),
     }
-    for name in ("boundary", "material", "vem", "loads", "contact", "solver", "output"):
+    for name in ("boundary", "material", "vem", "loads", "contact", "solver", "output", "adapt"):
         tables[name] = _table(head, _rows(getattr(s, name.title())))
     return tables
 

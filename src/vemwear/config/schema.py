@@ -15,7 +15,8 @@ One job, one module: every section's model is here, down to :class:`ConfigFile` 
 file), so that the schema reads in one place; most of its length is the one-line
 description of each key. The base model and the union and expression types the keys
 are declared with are in :mod:`vemwear.config.sections`, the ``[mesh]`` forms (built
-from the mesh registries) in :mod:`vemwear.config.mesh_forms`.
+from the mesh registries) in :mod:`vemwear.config.mesh_forms`, ``[adapt]`` with its
+checks in :mod:`vemwear.config.adapt`.
 """
 
 import difflib
@@ -27,6 +28,7 @@ from ..mesh.boundary import SIDES
 from ..simulate import Problem, SolverOptions
 from ..solvers import BACKENDS, SOLVERS
 from ..vem import STABILIZATIONS
+from .adapt import Adapt
 from .errors import error, got, show, suggest
 from .mesh_forms import MeshFile, MeshForm
 from .sections import Section, by_kind, choice, components, expression, library_default
@@ -560,6 +562,11 @@ class ConfigFile(Section):
     time: TimeForm = Field(description="exactly one of steps, dt, pattern, levels")
     solver: Solver = Solver.model_construct()
     output: Output = Output.model_construct()
+    adapt: Adapt | None = Field(
+        None,
+        description="adaptive meshes in time: the estimator, the marking and when the mesh "
+        "changes (absent: the mesh stays)",
+    )
 
     @classmethod
     def _unknown(cls, key: str, names: list[str], data: dict[str, Any]) -> str:

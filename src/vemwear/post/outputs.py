@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from ..simulate import Result
 
-__all__ = ["FIGURE_NAMES", "FIGURE_NAMES_3D", "write_outputs"]
+__all__ = ["FIGURE_NAMES", "FIGURE_NAMES_3D", "FIGURE_NAMES_ADAPTIVE", "write_outputs"]
 
 #: File names of the figures written by :func:`write_outputs`.
 FIGURE_NAMES = {
@@ -27,6 +27,8 @@ FIGURE_NAMES_3D = {
     "time_history": "time_history.png",
     "forces": "forces.png",
 }
+#: File names of the figures of an adaptive run (:mod:`vemwear.post.adaptive`).
+FIGURE_NAMES_ADAPTIVE = {"contact_profiles": "contact_profiles.png", "meshes": "meshes.png"}
 
 
 def write_outputs(

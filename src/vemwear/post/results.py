@@ -219,14 +219,8 @@ def upgrade_arrays(data: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-def static_arrays(problem: Any, plan: Any) -> dict[str, NDArray[Any]]:
-    """The arrays of ``result.npz`` that do not depend on the solution: the kept levels
-    (``plan``, a :class:`~vemwear.simulate.stream.StoragePlan`: ``t`` and ``levels`` of
-    the kept rows, ``u_levels`` the rows with a displacement), the mesh, the contact
-    nodes and their data."""
-    mesh = problem.mesh
-    cb = problem.contact
-    nodal = problem.nodal
+def static_mesh_arrays(mesh: Mesh | Mesh3D) -> dict[str, NDArray[Any]]:
+    """The arrays of a mesh in ``result.npz`` (:func:`mesh_from_arrays` reads them)."""
     if isinstance(mesh, Mesh3D):
         cells = {k: np.asarray(getattr(mesh, k), dtype=np.int64) for k in MESH3D_ARRAYS}
         cells["cell_face_signs"] = cells["cell_face_signs"].astype(np.int8)
@@ -236,12 +230,24 @@ def static_arrays(problem: Any, plan: Any) -> dict[str, NDArray[Any]]:
             "cells_vertices": np.asarray(mesh.cell_vertices, dtype=np.int64),
         }
     return {
-        "t": np.asarray(problem.time.t, dtype=np.float64)[plan.levels],
-        "levels": np.asarray(plan.levels, dtype=np.int64),
         "points": np.asarray(mesh.points, dtype=np.float64),
         **cells,
         "boundary_tags": np.asarray(mesh.boundary_tags, dtype=np.int8),
         "part_names": np.array(mesh.part_names, dtype=str),
+    }
+
+
+def static_arrays(problem: Any, plan: Any) -> dict[str, NDArray[Any]]:
+    """The arrays of ``result.npz`` that do not depend on the solution: the kept levels
+    (``plan``, a :class:`~vemwear.simulate.stream.StoragePlan`: ``t`` and ``levels`` of
+    the kept rows, ``u_levels`` the rows with a displacement), the mesh, the contact
+    nodes and their data."""
+    cb = problem.contact
+    nodal = problem.nodal
+    return {
+        "t": np.asarray(problem.time.t, dtype=np.float64)[plan.levels],
+        "levels": np.asarray(plan.levels, dtype=np.int64),
+        **static_mesh_arrays(problem.mesh),
         "u_levels": np.searchsorted(plan.levels, plan.u_levels).astype(np.int64),
         "contact_nodes": np.asarray(cb.nodes, dtype=np.int64),
         "contact_s": np.asarray(cb.s, dtype=np.float64),

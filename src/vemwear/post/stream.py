@@ -326,6 +326,13 @@ def export_npz(outdir: str | os.PathLike[str], *, force: bool = False) -> Path:
     src, target = out / STREAM_NAME, out / NPZ_NAME
     if not src.is_file():
         raise ValueError(f"{out}: no streamed result {STREAM_NAME} to export")
+    from .adaptive_stream import is_adaptive
+
+    if is_adaptive(src):
+        raise ValueError(
+            f"{src} holds an [adapt] run, one group per mesh (docs/config.md, [adapt]); its "
+            "levels have no common mesh to put into one result.npz: read the groups with h5py"
+        )
     if target.exists() and not force:
         raise ValueError(f"{target} exists; use --force to write it again")
     need, avail = stream_bytes(src), available_memory()

@@ -19,6 +19,10 @@ quadrilaterals (type 5) as such, every other polygon as type 3 followed by its v
 count. meshio's XDMF writer has no general polygons, so the XML is written here; the
 heavy data goes through h5py. Both files are written under temporary names and renamed
 into place when complete, the ``.h5`` first.
+
+:func:`write_xdmf_meshes` writes levels computed on several meshes (an adaptive run,
+:mod:`vemwear.post.adaptive`) the same way, every mesh once (``/mesh_000``, ...) and
+every level's grid on its mesh.
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ if TYPE_CHECKING:
     from ..mesh.polymesh import Mesh
     from ..simulate.loop import Result
 
-__all__ = ["mixed_topology", "write_xdmf_series"]
+__all__ = ["mixed_topology", "write_xdmf_meshes", "write_xdmf_series"]
 
 _TRIANGLE, _QUAD, _POLYGON = 4, 5, 3
 
@@ -106,17 +110,79 @@ def write_xdmf_series(
     Path
         The ``.xdmf`` file.
     """
+    chosen = [int(v) for v in (result.u_levels if levels is None else levels)]
+    return write_xdmf_meshes([(result, chosen, {})], outdir, name, shared=True)
+
+
+def write_xdmf_meshes(
+    parts: list[tuple[Result, list[int], dict[str, NDArray[Any]]]],
+    outdir: str | os.PathLike[str],
+    name: str = "solution",
+    *,
+    shared: bool = False,
+) -> Path:
+    """Write levels computed on several meshes as one temporal collection.
+
+    Parameters
+    ----------
+    parts : list of (Result, rows, cell data)
+        Every mesh once: a result on it, the rows to write (in time order across the
+        parts), and cell data of the mesh written with every row (e.g. the refinement
+        ``level``).
+    outdir : path
+        Output directory; created if missing.
+    name : str
+        Base name of the two files.
+    shared : bool
+        One mesh, stored as ``/mesh`` (the layout of :func:`write_xdmf_series`); else
+        the k-th part's mesh is ``/mesh_k`` (k from 000).
+
+    Returns
+    -------
+    Path
+        The ``.xdmf`` file.
+    """
     import h5py
 
     if not name or os.sep in name or (os.altsep and os.altsep in name):
         raise ValueError(f"xdmf: series name must be a plain file name, got {name!r}")
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
-    mesh = result.problem.mesh
-    chosen = [int(v) for v in (result.u_levels if levels is None else levels)]
     h5name = f"{name}.h5"
-    projection = Projection(mesh)
     grids: list[str] = []
+    with atomic_file(out / h5name) as tmp_h5:
+        with h5py.File(tmp_h5, "w") as f:
+            j = 0
+            for k, (result, rows, extra) in enumerate(parts):
+                where = "/mesh" if shared else f"/mesh_{k:03d}"
+                grids += _grids(f, h5name, where, result, rows, extra, name, j, shared)
+                j += len(rows)
+    text = (
+        '<?xml version="1.0"?>\n<Xdmf Version="3.0">\n<Domain>\n'
+        f'<Grid Name="{name}" GridType="Collection" CollectionType="Temporal">\n'
+        + "\n".join(grids)
+        + "\n</Grid>\n</Domain>\n</Xdmf>\n"
+    )
+    with atomic_file(out / f"{name}.xdmf") as tmp_x:
+        tmp_x.write_text(text, encoding="utf-8")
+    return out / f"{name}.xdmf"
+
+
+def _grids(
+    f: Any,
+    h5name: str,
+    where: str,
+    result: Result,
+    rows: list[int],
+    extra: dict[str, NDArray[Any]],
+    name: str,
+    j0: int,
+    shared: bool,
+) -> list[str]:
+    """Write one mesh at ``where`` and its rows as ``/levels/j`` (j from ``j0``); the
+    XML of their grids, named by the row (``shared``) or the time level."""
+    mesh = result.problem.mesh
+    projection = Projection(mesh)
     refined = refined_mesh(mesh) if has_quadratic_dofs(result) else None
     if refined is None:
         topo, points = mixed_topology(mesh), np.asarray(mesh.points, dtype=np.float64)
@@ -127,38 +193,33 @@ def write_xdmf_series(
         cell_id, kind, n_elements = refined.parent, "Triangle", len(refined.triangles)
     mesh_items = (
         f'<Topology TopologyType="{kind}" NumberOfElements="{n_elements}">'
-        f"{_item(topo.shape, topo.dtype, h5name, '/mesh/topology')}</Topology>"
+        f"{_item(topo.shape, topo.dtype, h5name, f'{where}/topology')}</Topology>"
         f'<Geometry GeometryType="XY">'
-        f"{_item(points.shape, points.dtype, h5name, '/mesh/points')}</Geometry>"
+        f"{_item(points.shape, points.dtype, h5name, f'{where}/points')}</Geometry>"
     )
-    with atomic_file(out / h5name) as tmp_h5:
-        with h5py.File(tmp_h5, "w") as f:
-            f["mesh/topology"] = topo
-            f["mesh/points"] = points
-            f["mesh/cell_id"] = cell_id
-            for j, lv in enumerate(chosen):
-                point_data, cell_data = (
-                    level_fields(result, lv, projection)
-                    if refined is None
-                    else refined_level_fields(result, lv, refined)
-                )
-                attrs = []
-                for center, fields in (("Node", point_data), ("Cell", cell_data)):
-                    for key, value in fields.items():
-                        path = f"/levels/{j}/{key}"
-                        f[path] = np.asarray(value, dtype=np.float64)
-                        attrs.append(_attribute(key, center, f[path][()], h5name, path))
-                attrs.append(_attribute("cell_id", "Cell", cell_id, h5name, "/mesh/cell_id"))
-                grids.append(
-                    f'<Grid Name="{name}_{lv}" GridType="Uniform">'
-                    f'<Time Value="{float(result.t[lv])!r}"/>{mesh_items}{"".join(attrs)}</Grid>'
-                )
-    text = (
-        '<?xml version="1.0"?>\n<Xdmf Version="3.0">\n<Domain>\n'
-        f'<Grid Name="{name}" GridType="Collection" CollectionType="Temporal">\n'
-        + "\n".join(grids)
-        + "\n</Grid>\n</Domain>\n</Xdmf>\n"
-    )
-    with atomic_file(out / f"{name}.xdmf") as tmp_x:
-        tmp_x.write_text(text, encoding="utf-8")
-    return out / f"{name}.xdmf"
+    f[f"{where}/topology"] = topo
+    f[f"{where}/points"] = points
+    f[f"{where}/cell_id"] = cell_id
+    fixed = [_attribute("cell_id", "Cell", cell_id, h5name, f"{where}/cell_id")]
+    for key, value in extra.items():
+        f[f"{where}/{key}"] = value[cell_id]
+        fixed.append(_attribute(key, "Cell", value[cell_id], h5name, f"{where}/{key}"))
+    grids = []
+    for j, lv in enumerate(rows, start=j0):
+        point_data, cell_data = (
+            level_fields(result, lv, projection)
+            if refined is None
+            else refined_level_fields(result, lv, refined)
+        )
+        attrs = []
+        for center, fields in (("Node", point_data), ("Cell", cell_data)):
+            for key, value in fields.items():
+                path = f"/levels/{j}/{key}"
+                f[path] = np.asarray(value, dtype=np.float64)
+                attrs.append(_attribute(key, center, f[path][()], h5name, path))
+        label = lv if shared or result.levels is None else int(result.levels[lv])
+        grids.append(
+            f'<Grid Name="{name}_{label}" GridType="Uniform">'
+            f'<Time Value="{float(result.t[lv])!r}"/>{mesh_items}{"".join(attrs + fixed)}</Grid>'
+        )
+    return grids

@@ -15,6 +15,11 @@ The fingerprint covers the physics and the discretization, not the solver option
 run stopped because its solver did not converge may go on with another ``tol``,
 ``max_iter`` or method. A change of the physics is refused with the list of what
 changed (:func:`differences`).
+
+An adaptive run (``[adapt]``) is checkpointed at its mesh changes instead
+(:func:`write_adaptive_checkpoint`): the next segment's mesh, cell tree and wear, after
+the finished segments are durable in ``result.h5``
+(:class:`vemwear.post.adaptive_stream.AdaptiveH5`).
 """
 
 from __future__ import annotations
@@ -22,14 +27,24 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..simulate.stream import LoopState, state_arrays, state_from_arrays
 from ..util.atomic import atomic_file
 
-__all__ = ["CHECKPOINT_NAME", "differences", "read_checkpoint", "write_checkpoint"]
+if TYPE_CHECKING:
+    from ..simulate.adaptive_time import AdaptiveState
+
+__all__ = [
+    "CHECKPOINT_NAME",
+    "differences",
+    "read_adaptive_checkpoint",
+    "read_checkpoint",
+    "write_adaptive_checkpoint",
+    "write_checkpoint",
+]
 
 #: File name of the checkpoint in an output directory.
 CHECKPOINT_NAME = "checkpoint.npz"
@@ -149,3 +164,55 @@ def differences(old: Mapping[str, Any], new: Mapping[str, Any], limit: int = 3) 
     if len(diffs) > limit:
         diffs = [*diffs[:limit], f"and {len(diffs) - limit} more"]
     return diffs
+
+
+# ---------------------------------------------------------------------------- adaptive runs
+def write_adaptive_checkpoint(outdir: Path, state: AdaptiveState, meta: Mapping[str, Any]) -> Path:
+    """Write the checkpoint of an adaptive run at a mesh change: the next segment's
+    first level, mesh, cell tree and wear (:class:`~vemwear.simulate.adaptive_time.
+    AdaptiveState`), atomically and durably, with ``meta`` as for
+    :func:`write_checkpoint`."""
+    from ..post.results import static_mesh_arrays
+
+    arrays: dict[str, Any] = {f"mesh_{k}": v for k, v in static_mesh_arrays(state.mesh).items()}
+    arrays.update({f"tree_{k}": getattr(state.tree, k) for k in _TREE})
+    arrays["wear"] = np.asarray(state.wear, dtype=np.float64)
+    info = {**meta, "adaptive": True, "segment": state.segment, "completed": state.first}
+    arrays["meta"] = np.array(json.dumps(info))
+    target = outdir / CHECKPOINT_NAME
+    with atomic_file(target, durable=True) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, **arrays)
+    return target
+
+
+def read_adaptive_checkpoint(outdir: Path) -> tuple[AdaptiveState, dict[str, Any]]:
+    """The state and the metadata of the checkpoint of an adaptive run.
+
+    Raises
+    ------
+    ValueError
+        If the file cannot be read as the checkpoint of an adaptive run.
+    """
+    from ..mesh.adapt import CellTree
+    from ..post.results import mesh_from_arrays
+    from ..simulate.adaptive_time import AdaptiveState
+
+    path = outdir / CHECKPOINT_NAME
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+            if not meta.get("adaptive"):
+                raise ValueError("it is the checkpoint of a run without [adapt]")
+            mesh = mesh_from_arrays({k[5:]: data[k] for k in data.files if k.startswith("mesh_")})
+            tree = CellTree(*(np.asarray(data[f"tree_{k}"]) for k in _TREE))
+            wear = np.asarray(data["wear"])
+    except (OSError, KeyError, ValueError) as exc:
+        raise ValueError(f"{path} is not a readable checkpoint of an adaptive run: {exc}") from None
+    from ..mesh.polymesh import Mesh
+
+    assert isinstance(mesh, Mesh)
+    state = AdaptiveState(int(meta["segment"]), int(meta["completed"]), mesh, tree, wear)
+    return state, meta
+
+
+_TREE = ("level", "family", "parent_family", "born")

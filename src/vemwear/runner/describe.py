@@ -110,6 +110,25 @@ def check_rows(cfg: Config) -> Rows:
         ("held by", "; ".join(_held(pr))),
         ("contact nodes", f"{cb.m} on {edges} contact edges (Gamma_C length {lengths:.6g})"),
         *_common_rows(cfg, contact_rows),
+        *_adapt_rows(cfg),
+    ]
+
+
+def _adapt_rows(cfg: Config) -> Rows:
+    """The ``[adapt]`` settings, if any."""
+    a = cfg.adapt
+    if a is None:
+        return []
+    bound = [f"max_cells {a.max_cells}"] if a.max_cells is not None else []
+    bound += [f"target_error {a.target_error:g}"] if a.target_error is not None else []
+    bound += [f"max_level {a.max_level}"] if a.max_level is not None else []
+    coarsen = f"coarsen {a.coarsen:g} of eta^2" if a.coarsen > 0 else "no coarsening"
+    return [
+        (
+            "adapt",
+            f"residual estimator, mesh change every {a.every} levels, theta {a.theta:g}, "
+            f"{', '.join(bound)}, {coarsen}",
+        )
     ]
 
 

@@ -14,8 +14,9 @@ run is checked, so that every refusal is as cheap as it can be:
    (:func:`vemwear.runner.run.prepare_run`);
 6. the warnings (stale temporaries, smallness of Theorem 3.4, overshooting wear steps)
    and the plan's line are said;
-7. the levels are solved (or the cycles jumped: ``[time] cycle_jump``) and the outputs
-   written.
+7. the levels are solved (or the cycles jumped: ``[time] cycle_jump``; or the mesh
+   adapted every few levels: ``[adapt]``, :mod:`vemwear.runner.adaptive`) and the
+   outputs written.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from ..config import Config
     from ..simulate import Result, SolverOptions
+    from ..simulate.adaptive_time import Segment
     from ..simulate.cycles import CycleResult
 
 __all__ = ["LaunchError", "RunOutcome", "overshoot_lines", "run_config"]
@@ -51,10 +53,13 @@ class RunOutcome:
     out : Path
         The output directory.
     result : Result or None
-        The result (None for a cycle-jump run, a run that was complete already, or one
-        whose arrays did not fit in memory).
+        The result (None for a cycle-jump or an adaptive run, a run that was complete
+        already, or one whose arrays did not fit in memory).
     cycles : CycleResult or None
         The cycles of a ``[time] cycle_jump`` run.
+    segments : list of Segment or None
+        The meshes of an ``[adapt]`` run, each with its levels (read back from
+        ``result.h5``).
     note : str
         A line about the outcome (complete already; ``result.h5`` only).
     resumed_from : int or None
@@ -74,6 +79,7 @@ class RunOutcome:
     out: Path
     result: Result | None = None
     cycles: CycleResult | None = None
+    segments: list[Segment] | None = None
     note: str = ""
     resumed_from: int | None = None
     warnings: list[str] = field(default_factory=list)
@@ -256,6 +262,14 @@ def _run_config(
     have = _resumed_bytes(out) if resume else 0
     cfg = load_config(config, admit=admit_sizes(out, force_size=force_size, have=have))
     options = _solver_options(cfg.solver, solver, backend)
+    if cfg.adapt is not None:
+        from ..util.mpi import launched
+
+        if launched().size > 1:
+            raise LaunchError(
+                f"{config}: [adapt] runs are not split over MPI ranks (each mesh change "
+                "would rebuild the distributed factorization); run vemwear without mpirun"
+            )
     if cfg.cycles is not None and resume:
         raise ResumeError(
             "--resume: a run with [time] cycle_jump is not checkpointed; run it again"
@@ -306,6 +320,12 @@ def _run_config(
         from .cycles import execute_cycles
 
         _, outcome.cycles = execute_cycles(plan, progress=progress)
+    elif cfg.adapt is not None:
+        from .adaptive import execute_adaptive
+
+        outcome.segments = execute_adaptive(plan, progress=progress)
+        if plan.state is not None:
+            outcome.resumed_from = int(plan.state.completed)
     else:
         result = execute_run(plan, progress=progress)
         if isinstance(result, str):  # the arrays do not fit in memory: result.h5 only

@@ -36,6 +36,11 @@
   series (about ``16 n + 160 C`` bytes per stored displacement; ``24 n + 560 C`` in 3D:
   the polyhedra's faces and the 3 x 3 tensors).
 
+An ``[adapt]`` run keeps every level with its displacement, on meshes of up to
+``max_cells`` cells: its estimate is that of a run on a mesh of ``max_cells`` cells (the
+vertices and contact nodes grown in proportion) keeping every level (on the initial mesh
+when only ``target_error`` bounds the refinement).
+
 Two checks, one rule: a run is refused (exit 2, with the numbers, unless
 ``--force-size``) when its estimate exceeds the machine's available memory or the free
 disk of the output place (on ``--resume``, the free disk plus what ``result.h5``
@@ -313,11 +318,18 @@ def estimate_config(cfg: Config, *, base: float | None = None) -> Estimate:
     # the multiples of every, and the final and stored levels that are not
     u = np.union1d(np.asarray(out.u_levels, dtype=np.int64), [L - 1])
     kept = -(-L // out.every) + int(np.count_nonzero(u % out.every))
+    points, cells, contact = pr.mesh.n_points, pr.mesh.n_cells, len(pr.contact.nodes)
+    if cfg.adapt is not None:  # every level and its u kept, on meshes of up to max_cells
+        stored = kept = L
+        if cfg.adapt.max_cells is not None:
+            grow = cfg.adapt.max_cells / cells
+            points, contact = math.ceil(points * grow), math.ceil(contact * grow)
+            cells = cfg.adapt.max_cells
     return estimate(
         levels=L,
-        points=pr.mesh.n_points,
-        cells=pr.mesh.n_cells,
-        contact=len(pr.contact.nodes),
+        points=points,
+        cells=cells,
+        contact=contact,
         kept=kept,
         stored_u=stored,
         paraview=out.vtk,

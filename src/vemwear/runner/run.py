@@ -28,6 +28,7 @@ with the same solver.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shlex
 from contextlib import ExitStack
@@ -41,7 +42,13 @@ import numpy as np
 from ..post.outputs import write_outputs
 from ..util.atomic import write_atomic
 from ..util.hashing import sha256_file, sha256_json
-from .checkpoint import CHECKPOINT_NAME, differences, read_checkpoint, write_checkpoint
+from .checkpoint import (
+    CHECKPOINT_NAME,
+    differences,
+    read_adaptive_checkpoint,
+    read_checkpoint,
+    write_checkpoint,
+)
 from .outdir import (
     LOCK_NAME,
     MARKER_NAME,
@@ -60,6 +67,7 @@ from .signals import check_stop, saving, stop_reason
 if TYPE_CHECKING:
     from ..config import Config
     from ..simulate import Result, SolverOptions
+    from ..simulate.adaptive_time import AdaptiveState
     from ..simulate.stream import LoopState, StoragePlan
 
 __all__ = [
@@ -87,12 +95,12 @@ class RunComplete(Exception):
 def output_names() -> list[str]:
     """Every top-level name a run may write into its output directory (a user's file of
     one of these names is never overwritten: ``--force`` refuses)."""
-    from ..post.outputs import FIGURE_NAMES, FIGURE_NAMES_3D
+    from ..post.outputs import FIGURE_NAMES, FIGURE_NAMES_3D, FIGURE_NAMES_ADAPTIVE
     from ..post.results import NPZ_NAME, SUMMARY_NAME
     from ..post.stream import STREAM_NAME
 
     series = ["solution.xdmf", "solution.h5", "solution.pvd", "solution"]
-    figures = [*FIGURE_NAMES.values(), *FIGURE_NAMES_3D.values()]
+    figures = [*FIGURE_NAMES.values(), *FIGURE_NAMES_3D.values(), *FIGURE_NAMES_ADAPTIVE.values()]
     names = {STREAM_NAME, CHECKPOINT_NAME, PARTIAL_NAME, SUMMARY_NAME, NPZ_NAME}
     return sorted({*names, *figures, *series})
 
@@ -170,8 +178,8 @@ class RunPlan:
         The effective solver options.
     storage : StoragePlan
         The levels the run keeps.
-    state : LoopState or None
-        The checkpoint to resume from.
+    state : LoopState or AdaptiveState or None
+        The checkpoint to resume from (an :class:`AdaptiveState` for ``[adapt]``).
     previous_solver : dict
         The solver options of the stopped run (recorded in ``summary.json``).
     meta : dict
@@ -193,7 +201,7 @@ class RunPlan:
     out: Path
     solver: SolverOptions
     storage: StoragePlan
-    state: LoopState | None = None
+    state: LoopState | AdaptiveState | None = None
     previous_solver: dict[str, Any] = field(default_factory=dict)
     meta: dict[str, Any] = field(default_factory=dict)
     command: str = ""
@@ -278,6 +286,8 @@ def prepare_run(
         "storage_sha256": _storage_hash(storage),
         "solver": {"method": solver.method, "tol": solver.tol, "max_iter": solver.max_iter},
     }
+    if cfg.adapt is not None:
+        meta["adapt"] = dataclasses.asdict(cfg.adapt)
     outdir = Path(out).expanduser().absolute()
     plan = RunPlan(
         cfg=cfg,
@@ -324,16 +334,27 @@ def prepare_run(
     return plan
 
 
-def _load_checkpoint(outdir: Path, meta: dict[str, Any]) -> tuple[LoopState, dict[str, Any]]:
+def _load_checkpoint(
+    outdir: Path, meta: dict[str, Any]
+) -> tuple[LoopState | AdaptiveState, dict[str, Any]]:
     if not (outdir / CHECKPOINT_NAME).is_file():
         raise ResumeError(
             f"--resume: {outdir} holds no checkpoint to resume from (it is written every "
             "[output] checkpoint seconds and when a run stops); start over with --force"
         )
+    state: LoopState | AdaptiveState
     try:
-        state, stored = read_checkpoint(outdir)
+        if "adapt" in meta:
+            state, stored = read_adaptive_checkpoint(outdir)
+        else:
+            state, stored = read_checkpoint(outdir)
     except ValueError as exc:
         raise ResumeError(f"--resume: {exc}") from None
+    if stored.get("adapt") != meta.get("adapt"):
+        raise ResumeError(
+            f"--resume refused: {outdir} was computed with other [adapt] settings (or without "
+            "[adapt]); restore them, or start over with --force"
+        )
     if stored.get("inputs_sha256") != meta["inputs_sha256"]:
         diffs = differences(stored.get("fingerprint", {}), meta["fingerprint"])
         what = "; ".join(diffs) if diffs else "the stored fingerprint does not match"
@@ -376,6 +397,7 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
     """
     from ..post.stream import STREAM_NAME, H5Sink
     from ..simulate.levels import run_levels
+    from ..simulate.stream import LoopState
 
     out, cfg = plan.out, plan.cfg
     hold_lock(plan)
@@ -403,7 +425,7 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
                 plan.solver,
                 sink,
                 plan.storage,
-                start=plan.state,
+                start=plan.state if isinstance(plan.state, LoopState) else None,
                 progress=progress,
                 checkpoint=cfg.output.checkpoint,
                 timings=timings,

@@ -13,11 +13,18 @@ families all marked), the wear moves to the new contact nodes
 discretization and its factorization are built for the new mesh, and the next segment
 solves that level again on it. A segment owns its levels up to, not including, its
 last (the next segment's first); the last segment owns the final level too.
+
+The state between two segments (:class:`AdaptiveState`: the next segment's first level,
+mesh, cell tree and wear) is all the run carries over, so a run started again from it
+(``start``) gives the same levels, bitwise, as one that went on; ``on_segment``
+receives every finished segment with that state (the runner streams the one and
+checkpoints the other there).
 """
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,7 +42,7 @@ from .problem import Problem
 from .stream import LoopState, StoragePlan
 from .timegrid import TimeGrid
 
-__all__ = ["Segment", "simulate_adaptive"]
+__all__ = ["AdaptSettings", "AdaptiveState", "Segment", "simulate_adaptive"]
 
 
 @dataclass(frozen=True)
@@ -65,6 +72,96 @@ class Segment:
     tree: CellTree
 
 
+@dataclass(frozen=True)
+class AdaptSettings:
+    """When and how the mesh of an adaptive run changes (the ``[adapt]`` table).
+
+    Attributes
+    ----------
+    every : int
+        Levels between mesh changes (>= 1).
+    theta : float
+        Dörfler's bulk fraction of the refinement, in (0, 1].
+    coarsen : float
+        The fraction of eta^2 the coarsened cells may carry, in [0, 1 - theta); 0: no
+        coarsening.
+    max_cells : int, optional
+        No refinement that would give more cells (coarsening still applies).
+    target_error : float, optional
+        No refinement at a level whose estimate eta is at most this (coarsening still
+        applies).
+    max_level : int, optional
+        Cells of this level are not refined further.
+    max_difference : int
+        Largest level difference of neighbours (>= 1).
+
+    Raises
+    ------
+    ValueError
+        Naming the setting (its message starts with the key's name).
+    """
+
+    every: int
+    theta: float = 0.5
+    coarsen: float = 0.0
+    max_cells: int | None = None
+    target_error: float | None = None
+    max_level: int | None = None
+    max_difference: int = 1
+
+    def __post_init__(self) -> None:
+        theta, coarsen = self.theta, self.coarsen
+        if int(self.every) < 1:
+            raise ValueError(f"every must be at least 1 level, got {self.every}")
+        if not 0.0 < theta <= 1.0:
+            raise ValueError(f"theta must lie in (0, 1], got {theta}")
+        if not 0.0 <= coarsen < 1.0:
+            raise ValueError(f"coarsen must lie in [0, 1), got {coarsen}")
+        if coarsen >= 1.0 - theta + 1e-12 and coarsen > 0:
+            raise ValueError(
+                f"coarsen = {coarsen} and theta = {theta} overlap: the cells to coarsen "
+                "would carry part of the bulk marked for refinement (need coarsen < 1 - theta)"
+            )
+        if self.max_cells is not None and self.max_cells < 1:
+            raise ValueError(f"max_cells must be at least 1, got {self.max_cells}")
+        if self.target_error is not None and not self.target_error > 0:
+            raise ValueError(f"target_error must be positive, got {self.target_error}")
+        if self.max_level is not None and self.max_level < 0:
+            raise ValueError(f"max_level must be >= 0, got {self.max_level}")
+        if self.max_difference < 1:
+            raise ValueError(f"max_difference must be at least 1, got {self.max_difference}")
+
+
+@dataclass(frozen=True)
+class AdaptiveState:
+    """What an adaptive run carries from one segment to the next.
+
+    Attributes
+    ----------
+    segment : int
+        The number of finished segments.
+    first : int
+        The next segment's first level.
+    mesh : Mesh
+        Its mesh.
+    tree : CellTree
+        The levels and families of its cells.
+    wear : (m,) array
+        The wear of level ``first`` at the mesh's contact nodes.
+    """
+
+    segment: int
+    first: int
+    mesh: Mesh
+    tree: CellTree
+    wear: NDArray[np.float64]
+
+    @property
+    def completed(self) -> int:
+        """The number of finished levels (those before :attr:`first`)."""
+        return self.first
+
+
 def simulate_adaptive(
     problem: Problem,
     *,
@@ -72,9 +169,13 @@ def simulate_adaptive(
     theta: float = 0.5,
     coarsen: float = 0.0,
     max_cells: int | None = None,
+    target_error: float | None = None,
     max_level: int | None = None,
     max_difference: int = 1,
     solver: SolverOptions | str = "newton",
+    start: AdaptiveState | None = None,
+    on_segment: Callable[[Segment, AdaptiveState | None], None] | None = None,
+    keep: bool = True,
 ) -> list[Segment]:
     """Run the scheme on a mesh that adapts every ``every`` levels (module docstring).
 
@@ -90,30 +191,31 @@ def simulate_adaptive(
         The fraction of eta^2 the coarsened cells may carry, in [0, 1); 0: no coarsening.
     max_cells : int, optional
         No refinement that would give more cells (coarsening still applies).
+    target_error : float, optional
+        No refinement at a mesh change whose estimate is at most this.
     max_level : int, optional
         Cells of this level are not refined further.
     max_difference : int
         Largest level difference of neighbours.
     solver : SolverOptions or str
         As for :func:`~vemwear.simulate.loop.simulate`.
+    start : AdaptiveState, optional
+        Go on from this state (given to ``on_segment`` by an earlier run of the same
+        problem and settings) instead of level 0.
+    on_segment : callable, optional
+        Called with every finished segment and the state the run goes on from (None
+        after the last segment).
+    keep : bool
+        Return the segments (False: an empty list; ``on_segment`` has them).
 
     Returns
     -------
     list of Segment
+        From ``start`` on.
     """
     if not isinstance(problem.mesh, Mesh) or problem.order != 1:
         raise ValueError("adaptive runs are implemented for k = 1 in 2D")
-    if int(every) < 1:
-        raise ValueError(f"[adapt] every must be at least 1 level, got {every}")
-    if not 0.0 <= coarsen < 1.0:
-        raise ValueError(f"[adapt] coarsen must lie in [0, 1), got {coarsen}")
-    if not 0.0 < theta <= 1.0:
-        raise ValueError(f"[adapt] theta must lie in (0, 1], got {theta}")
-    if coarsen >= 1.0 - theta + 1e-12 and coarsen > 0:
-        raise ValueError(
-            f"[adapt] coarsen = {coarsen} and theta = {theta} overlap: the cells to coarsen "
-            "would carry part of the bulk marked for refinement (need coarsen < 1 - theta)"
-        )
+    cfg = AdaptSettings(every, theta, coarsen, max_cells, target_error, max_level, max_difference)
     opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
     t = problem.time.t
     N = len(t) - 1
@@ -122,50 +224,51 @@ def simulate_adaptive(
     parts = tuple(pc.part for pc in problem.parts)
     w: NDArray[np.float64] | None = None
     segments: list[Segment] = []
-    n0 = 0
+    n0, k = 0, 0
+    if start is not None:
+        n0, k, mesh, tree, w = start.first, start.segment, start.mesh, start.tree, start.wear
     while True:
-        n1 = min(n0 + int(every), N)
+        n1 = min(n0 + cfg.every, N)
         pr = dataclasses.replace(problem, mesh=mesh, time=TimeGrid(t[: n1 + 1]))
         plan = StoragePlan.make(n1 + 1, np.arange(n0, n1 + 1))
         sink = MemorySink(pr, plan, opts)
-        start = None if w is None else LoopState(n0, w)
-        run_levels(pr, opts, sink, plan, start=start, timings=sink.result.timings)
+        state = None if w is None else LoopState(n0, w)
+        run_levels(pr, opts, sink, plan, start=state, timings=sink.result.timings)
         res = sink.result
         res.completed = n1 + 1
         est = estimate(pr, res.u[-1], res.p_rigid[-1], res.wear[-1], level=n1)
-        segments.append(Segment(pr, n0, n1, res, est, tree))
+        seg = Segment(pr, n0, n1, res, est, tree)
+        if keep:
+            segments.append(seg)
         if n1 == N:
+            if on_segment is not None:
+                on_segment(seg, None)
             return segments
-        new, tree = _change(mesh, tree, est, theta, coarsen, max_cells, max_level, max_difference)
+        new, tree = _change(mesh, tree, est, cfg)
         w = res.wear[-1]
         if new is not mesh:
             nxt = dataclasses.replace(problem, mesh=new)
             w = transfer_along_contact(mesh, pr.contact.nodes, w, nxt.contact.points, parts)
         pr.discrete.release_solvers()  # the old mesh's factorization
-        mesh, n0 = new, n1
+        mesh, n0, k = new, n1, k + 1
+        if on_segment is not None:
+            on_segment(seg, AdaptiveState(k, n0, mesh, tree, w))
 
 
-def _change(
-    mesh: Mesh,
-    tree: CellTree,
-    est: Estimate,
-    theta: float,
-    coarsen: float,
-    max_cells: int | None,
-    max_level: int | None,
-    max_difference: int,
-) -> tuple[Mesh, CellTree]:
+def _change(mesh: Mesh, tree: CellTree, est: Estimate, cfg: AdaptSettings) -> tuple[Mesh, CellTree]:
     """Coarsen, then refine, once: the new mesh and its tree."""
     eta2 = est.indicators
-    refine = dorfler_marking(eta2, theta)
-    if max_level is not None:
-        refine = refine[tree.level[refine] < max_level]
+    refine = dorfler_marking(eta2, cfg.theta)
+    if cfg.max_level is not None:
+        refine = refine[tree.level[refine] < cfg.max_level]
+    if cfg.target_error is not None and est.total <= cfg.target_error:
+        refine = refine[:0]  # accurate enough: coarsening only
     owner = np.arange(mesh.n_cells)
-    if coarsen > 0:
-        spare = np.setdiff1d(coarsening_marking(eta2, coarsen), refine)
-        mesh, tree, owner = coarsen_tree(mesh, tree, spare, max_difference)
+    if cfg.coarsen > 0:
+        spare = np.setdiff1d(coarsening_marking(eta2, cfg.coarsen), refine)
+        mesh, tree, owner = coarsen_tree(mesh, tree, spare, cfg.max_difference)
     if refine.size:
-        new, tree2, _ = refine_tree(mesh, tree, owner[refine], max_difference)
-        if max_cells is None or new.n_cells <= max_cells:
+        new, tree2, _ = refine_tree(mesh, tree, owner[refine], cfg.max_difference)
+        if cfg.max_cells is None or new.n_cells <= cfg.max_cells:
             return new, tree2
     return mesh, tree

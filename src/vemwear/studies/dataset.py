@@ -29,6 +29,11 @@ Variables per run (NaN for a failed run):
 ``status``          ``done`` or ``failed``; ``error`` the failure's message
 ``run_id``          the run's directory under ``OUTDIR/runs``
 
+An ``[adapt]`` run gives its levels on the contact nodes of all its meshes (each level
+piecewise linear along Gamma_C on its own mesh: :func:`~vemwear.post.adaptive_stream.
+contact_arrays`), so its maxima are those of its meshes' nodes and ``worn_volume`` that
+of its final mesh.
+
 Profiles along Gamma_C over time, ``(..., time, s)``: ``wear``, ``u_nu``, ``p_soft``; force
 resultants ``forces`` ``(..., time, part, component)``. When the runs have different
 meshes they are interpolated (linearly) onto a common arc-length grid (as many points
@@ -132,21 +137,29 @@ def _wanted(name: str) -> bool:
 
 def run_arrays(result: Any) -> dict[str, NDArray[Any]]:
     """The arrays of a run's ``result.npz`` that the Dataset uses, from its in-memory
-    result (a task hands them back, so the client does not read the file)."""
+    result (a task hands them back, so the client does not read the file), or from the
+    contact arrays of an ``[adapt]`` run (:func:`~vemwear.post.adaptive_stream.
+    contact_arrays`)."""
     from ..post.results import result_arrays
 
-    return {k: v for k, v in result_arrays(result).items() if _wanted(k)}
+    arrays = result if isinstance(result, Mapping) else result_arrays(result)
+    return {k: v for k, v in arrays.items() if _wanted(k)}
 
 
 def _load(out: Path, rid: str) -> dict[str, NDArray[Any]] | None:
     """A finished run's arrays under today's names (a run of an earlier execution may
     have written format 1), or None if its file cannot be read."""
+    from ..post.adaptive_stream import contact_arrays, is_adaptive, read_groups
     from ..post.results import NPZ_NAME, upgrade_arrays
+    from ..post.stream import STREAM_NAME
 
+    rundir = out / RUNS_DIR / rid
     try:
-        with np.load(out / RUNS_DIR / rid / NPZ_NAME, allow_pickle=False) as z:
+        if not (rundir / NPZ_NAME).is_file() and is_adaptive(rundir / STREAM_NAME):
+            return run_arrays(contact_arrays(read_groups(rundir / STREAM_NAME)))
+        with np.load(rundir / NPZ_NAME, allow_pickle=False) as z:
             return upgrade_arrays({k: z[k] for k in z.files if _wanted(k)})
-    except (OSError, ValueError):
+    except (OSError, ValueError, KeyError):
         return None
 
 

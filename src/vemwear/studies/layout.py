@@ -101,10 +101,13 @@ def remove_temporaries(out: Path, *subdirs: str) -> list[Path]:
 
 def is_complete(rundir: Path) -> bool:
     """Whether ``rundir`` holds the complete result of a run."""
+    from ..post.adaptive_stream import is_adaptive
     from ..runner.outdir import read_marker
 
     m = read_marker(rundir) if rundir.is_dir() else None
-    return bool(m and m.get("state") == "complete" and (rundir / "result.npz").is_file())
+    if not (m and m.get("state") == "complete"):
+        return False
+    return (rundir / "result.npz").is_file() or is_adaptive(rundir / "result.h5")
 
 
 def read_record(out: Path, rid: str) -> dict[str, Any] | None:

@@ -60,7 +60,9 @@ def _execute(config_path: Path, rundir: Path) -> tuple[Any, list[str]]:
     """One run of ``config_path`` into ``rundir`` by :func:`vemwear.runner.run_config`
     (the plan's refusals and the warnings as for ``vemwear run``): resumed from its
     checkpoint if a stopped attempt left one, else from the start. Returns the result
-    (None for a cycle-jump run, whose result is in its files) and the run's warnings:
+    (None for a cycle-jump run, whose result is in its files; for an ``[adapt]`` run the
+    contact arrays of :func:`~vemwear.post.adaptive_stream.contact_arrays`) and the
+    run's warnings:
     those ``vemwear run`` says, then the Python warnings raised meanwhile (each once)."""
     from ..runner import ResumeError, run_config
     from ..runner.checkpoint import CHECKPOINT_NAME
@@ -75,6 +77,12 @@ def _execute(config_path: Path, rundir: Path) -> tuple[Any, list[str]]:
         if outcome is None:
             outcome = run_config(config_path, rundir, force=True, progress=False)
     said = [*outcome.warnings, *(f"{w.category.__name__}: {w.message}" for w in caught)]
+    if outcome.segments is not None:  # [adapt]: the arrays of every mesh on one set of points
+        from ..post.adaptive_stream import contact_arrays, read_groups
+        from ..post.stream import STREAM_NAME
+
+        arrays = contact_arrays(read_groups(rundir / STREAM_NAME))
+        return arrays, list(dict.fromkeys(said))
     if outcome.result is None and outcome.cycles is None:  # result.h5 only
         raise RunFailed(outcome.note)
     return outcome.result, list(dict.fromkeys(said))
