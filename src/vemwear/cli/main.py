@@ -123,7 +123,7 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
     ):
         return EXIT_INPUT, str(exc)
     if _is(exc, "vemwear.simulate.levels", "WearOverflowError") or _is(
-        exc, "vemwear.runner.run", "WornThroughError"
+        exc, "vemwear.runner.partial", "WornThroughError"
     ):
         return EXIT_CONVERGENCE, str(exc)
     if _is(exc, "vemwear.solvers.system", "FactorizationError"):

@@ -31,15 +31,15 @@ import numpy as np
 from ..util.atomic import write_atomic
 from .checkpoint import CHECKPOINT_NAME, write_adaptive_checkpoint
 from .outdir import PARTIAL_NAME, write_marker
-from .run import (
+from .partial import (
     WornThroughError,
-    _discard,
-    _reason,
-    _worn_through,
-    _write_partial,
-    hold_lock,
+    discard,
     output_names,
+    reason_line,
+    worn_through,
+    write_partial,
 )
+from .run import hold_lock
 from .signals import check_stop, saving
 
 if TYPE_CHECKING:
@@ -110,7 +110,9 @@ def execute_adaptive(plan: RunPlan, *, progress: bool = True) -> list[Segment]:
             segments = _finish(plan)
         except BaseException as exc:
             with saving(reraise=False):
-                _write_partial(plan, plan.storage.n_levels, f"writing the outputs: {_reason(exc)}")
+                write_partial(
+                    plan, plan.storage.n_levels, f"writing the outputs: {reason_line(exc)}"
+                )
             exc.vemwear_note = (  # type: ignore[attr-defined]
                 f"; every time level is solved and saved in {plan.out}; write the outputs "
                 f"with: {plan.command}"
@@ -130,7 +132,7 @@ def _check_wear(seg: Segment, final: bool) -> None:
     for lv in range(seg.first, seg.last + 1 if final else seg.last):
         w = res.wear[int(np.searchsorted(res.levels, lv))]
         if np.any(w > g):
-            raise _worn_through(seg.problem, lv, w, g)
+            raise worn_through(seg.problem, lv, w, g)
 
 
 def _stop(plan: RunPlan, h5: Any, state: AdaptiveState | None, exc: BaseException) -> None:
@@ -140,12 +142,12 @@ def _stop(plan: RunPlan, h5: Any, state: AdaptiveState | None, exc: BaseExceptio
     except BaseException:
         pass
     if state is None:  # no mesh change finished: nothing to go on from
-        _discard(plan)
+        discard(plan)
         return
     c, L = state.first, plan.storage.n_levels
     try:
         with saving(reraise=False):
-            _write_partial(plan, c, _reason(exc))
+            write_partial(plan, c, reason_line(exc))
         note = f"; the {c} finished time levels (of {L}) are saved in {plan.out}"
         if not isinstance(exc, WornThroughError):
             note += f"; continue with: {plan.command}"

@@ -29,7 +29,6 @@ with the same solver.
 from __future__ import annotations
 
 import dataclasses
-import json
 import shlex
 from contextlib import ExitStack
 from dataclasses import dataclass, field
@@ -37,10 +36,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from ..post.outputs import write_outputs
-from ..util.atomic import write_atomic
 from ..util.hashing import sha256_file, sha256_json
 from .checkpoint import (
     CHECKPOINT_NAME,
@@ -50,8 +46,6 @@ from .checkpoint import (
     write_checkpoint,
 )
 from .outdir import (
-    LOCK_NAME,
-    MARKER_NAME,
     PARTIAL_NAME,
     OutputDirError,
     completed_leftovers,
@@ -62,7 +56,15 @@ from .outdir import (
     refuse_locked,
     write_marker,
 )
-from .signals import check_stop, saving, stop_reason
+from .partial import (
+    WearGuard,
+    WornThroughError,
+    discard,
+    output_names,
+    reason_line,
+    write_partial,
+)
+from .signals import saving
 
 if TYPE_CHECKING:
     from ..config import Config
@@ -90,68 +92,6 @@ class ResumeError(OutputDirError):
 
 class RunComplete(Exception):
     """``--resume`` of a run that is complete: nothing to do (the message says so)."""
-
-
-def output_names() -> list[str]:
-    """Every top-level name a run may write into its output directory (a user's file of
-    one of these names is never overwritten: ``--force`` refuses)."""
-    from ..post.outputs import FIGURE_NAMES, FIGURE_NAMES_3D, FIGURE_NAMES_ADAPTIVE
-    from ..post.results import NPZ_NAME, SUMMARY_NAME
-    from ..post.stream import STREAM_NAME
-
-    series = ["solution.xdmf", "solution.h5", "solution.pvd", "solution"]
-    figures = [*FIGURE_NAMES.values(), *FIGURE_NAMES_3D.values(), *FIGURE_NAMES_ADAPTIVE.values()]
-    names = {STREAM_NAME, CHECKPOINT_NAME, PARTIAL_NAME, SUMMARY_NAME, NPZ_NAME}
-    return sorted({*names, *figures, *series})
-
-
-class WornThroughError(ValueError):
-    """The wear exceeds the thickness g of the soft layer: the run stops there."""
-
-
-class _WearGuard:
-    """A level sink that stops the run at the first level whose wear exceeds g.
-
-    In the model the wear stays below the penetration ``u_nu <= g``: once ``w`` reaches
-    ``u_nu`` the soft layer carries no pressure there and wears no more. Wear beyond g is
-    the explicit rule (3.22) overshooting (``k kappa |v*| L_p >= 1``), and every level
-    after it is meaningless (``kappa = 1e308`` gave a wear of 5.5e304 on a layer 0.1
-    thick); so the run stops with the finished levels saved, and says why.
-    """
-
-    def __init__(self, sink: Any, problem: Any) -> None:
-        self._sink, self._problem = sink, problem
-        self._g = problem.nodal["g"]
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._sink, name)
-
-    def level(self, n: int, w: Any, solution: Any) -> None:
-        check_stop()  # a safe point of every level
-        if np.any(w > self._g):
-            raise _worn_through(self._problem, n, w, self._g)
-        self._sink.level(n, w, solution)
-
-
-def _worn_through(problem: Any, n: int, w: Any, g: Any) -> WornThroughError:
-    from ..simulate.explicit import overshoot
-
-    a = int(np.argmax(w - g))
-    x = ", ".join(f"{c:.4g}" for c in problem.contact.points[a])
-    t = problem.time.t
-    value, _, safe = overshoot(problem)
-    why = (
-        f"the explicit wear step overshoots (k kappa |v*| L_p up to {value:.3g}); use time "
-        f"steps below {safe:.3g} or a smaller kappa"
-        if value >= 1.0 and safe > 0
-        else "check the scale of [contact] kappa, v_star and the compliance law"
-    )
-    return WornThroughError(
-        f"the wear exceeds the layer thickness at time level {n} (t = {t[n]:g}): w = "
-        f"{w[a]:.6g} > g = {float(np.broadcast_to(g, w.shape)[a]):g} at contact node {a} "
-        f"(x = ({x})); the soft layer is worn through and the levels from here on would "
-        f"not be physical: {why}"
-    )
 
 
 def storage_plan(cfg: Config) -> StoragePlan:
@@ -370,20 +310,6 @@ def _load_checkpoint(
     return state, dict(stored.get("solver") or {})
 
 
-def _reason(exc: BaseException) -> str:
-    from ..simulate.levels import WearOverflowError
-    from ..solvers import ConvergenceError
-
-    by_signal = stop_reason(exc)
-    if by_signal is not None:
-        return by_signal
-    if isinstance(exc, WearOverflowError | WornThroughError):
-        return str(exc)
-    if isinstance(exc, ConvergenceError):
-        return f"the solver did not converge: {exc}"
-    return f"error: {type(exc).__name__}: {exc}"
-
-
 def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
     """Solve, streaming the levels into ``OUTDIR/result.h5`` with checkpoints; write
     the standard files when done.
@@ -417,7 +343,7 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
             resume=plan.state is not None,
             on_checkpoint=on_checkpoint,
         )
-        sink = _WearGuard(h5, cfg.problem)
+        sink = WearGuard(h5, cfg.problem)
         timings: dict[str, float] = {}
         try:
             final = run_levels(
@@ -441,7 +367,9 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
             result = _finish(plan, timings)
         except BaseException as exc:
             with saving(reraise=False):
-                _write_partial(plan, plan.storage.n_levels, f"writing the outputs: {_reason(exc)}")
+                write_partial(
+                    plan, plan.storage.n_levels, f"writing the outputs: {reason_line(exc)}"
+                )
             exc.vemwear_note = (  # type: ignore[attr-defined]
                 f"; every time level is solved and saved in {plan.out}; write the outputs "
                 f"with: {plan.command}"
@@ -460,13 +388,13 @@ def _stop(plan: RunPlan, sink: Any, exc: BaseException) -> None:
         except BaseException:
             pass
         finally:
-            _discard(plan)
+            discard(plan)
         return
     try:
         with saving(reraise=False):
             sink.checkpoint(state)
             sink.close()
-            _write_partial(plan, c, _reason(exc))
+            write_partial(plan, c, reason_line(exc))
         note = f"; the {c} finished time levels (of {L}) are saved in {plan.out}"
         if not isinstance(exc, WornThroughError):  # the same data would stop there again
             note += f"; continue with: {plan.command}"
@@ -483,63 +411,9 @@ def abandon_run(plan: RunPlan) -> None:
     output directory, and the directory if it made it (nothing else); release its lock."""
     try:
         if plan.state is None:
-            _discard(plan)
+            discard(plan)
     finally:
         _release_lock(plan)
-
-
-def _discard(plan: RunPlan) -> None:
-    """A run stopped before its first level: remove what it wrote (nothing else)."""
-    from ..post.stream import STREAM_NAME
-
-    for name in (STREAM_NAME, CHECKPOINT_NAME, MARKER_NAME, LOCK_NAME):
-        (plan.out / name).unlink(missing_ok=True)
-    if plan.created:
-        try:
-            plan.out.rmdir()  # only if nothing else was put there meanwhile
-        except OSError:
-            pass
-
-
-def _write_partial(plan: RunPlan, c: int, reason: str) -> None:
-    """``summary.json`` (partial) and ``PARTIAL.txt`` of a stopped run."""
-    from ..post.results import FORMAT, SUMMARY_NAME, jsonable
-    from ..post.stream import STREAM_NAME
-
-    cfg, L = plan.cfg, plan.storage.n_levels
-    t = cfg.problem.time.t
-    summary = {
-        "format": FORMAT,
-        "partial": True,
-        "reason": reason,
-        "completed": c,
-        "levels": L,
-        "inputs": {"config": cfg.data, "config_path": str(plan.config_path.resolve())},
-        "solver": plan.meta["solver"],
-        "files": {"stream": STREAM_NAME, "checkpoint": CHECKPOINT_NAME},
-    }
-    write_atomic(plan.out / SUMMARY_NAME, json.dumps(jsonable(summary), indent=2) + "\n")
-    t_done = f"t = 0 .. {t[c - 1]:.6g}" if c > 0 else "none"
-    text = f"""\
-This directory holds an UNFINISHED run of vemwear.
-
-  reason:    {reason}
-  finished:  {c} of {L} time levels ({t_done}; T = {t[-1]:g})
-  config:    {plan.config_path.resolve()} (sha256 {plan.meta["config_sha256"]})
-  written:   {datetime.now(UTC).isoformat(timespec="seconds")}
-
-To continue the run from level {c}:
-
-  {plan.command}
-
-The resumed run gives the same numbers as an uninterrupted run with the same solver;
-the solver options may change (e.g. a larger max_iter after a convergence failure).
-It refuses to start if the physics, the discretization or the kept levels changed.
-{STREAM_NAME} holds the finished levels (rows of levels >= {c} are not final);
-{CHECKPOINT_NAME} the state to go on from.
-"""
-    write_atomic(plan.out / PARTIAL_NAME, text)
-    write_marker(plan.out, "partial", output_names(), "run")
 
 
 def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
