@@ -145,3 +145,61 @@ def test_sigterm_while_a_zip_member_is_closed_is_a_stop_then_resume(tmp_path: Pa
     )
     assert again.returncode == 0, again.stderr
     assert (out / "result.npz").is_file()
+
+
+IN_SAVEFIG = textwrap.dedent(
+    """
+    import os, signal, sys, time
+    import matplotlib.figure
+    from vemwear.cli.main import main
+
+    savefig = matplotlib.figure.Figure.savefig
+    sent = []
+
+    def savefig_with_signal(self, *args, **kwargs):
+        # the signal lands in compiled code that replaces it by its own error, with no
+        # chain (matplotlib's C++ path code: "Invalid bounding box")
+        if not sent:
+            sent.append(1)
+            lost = False
+            try:
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(5)
+            except KeyboardInterrupt:
+                lost = True
+            if lost:
+                raise ValueError("Invalid bounding box")
+        return savefig(self, *args, **kwargs)
+
+    matplotlib.figure.Figure.savefig = savefig_with_signal
+    sys.exit(main(sys.argv[1:]))
+    """
+)
+
+
+def test_sigterm_replaced_by_a_libraries_own_error_is_a_stop_then_resume(
+    tmp_path: Path,
+) -> None:
+    """A signal that a compiled library turns into its own exception, with no chain to the
+    signal, during the final writes: still a stop (exit 130, every level saved), not an
+    internal error; --resume writes the outputs."""
+    cfg = tmp_path / "small.toml"
+    cfg.write_text(small_config("small", steps=4, output={"figures": True}))
+    out = tmp_path / "out"
+    script = tmp_path / "in_savefig.py"
+    script.write_text(IN_SAVEFIG)
+    run = [str(cfg), "-o", str(out), "--no-progress"]
+    done = subprocess.run(
+        [sys.executable, str(script), "run", *run], capture_output=True, text=True, env=_env()
+    )
+    assert done.returncode == 130, done.stderr
+    assert "every time level is solved and saved" in done.stderr, done.stderr
+    assert "terminated (SIGTERM)" in (out / "PARTIAL.txt").read_text()
+    again = subprocess.run(
+        [sys.executable, "-m", "vemwear", "run", *run, "--resume"],
+        capture_output=True,
+        text=True,
+        env=_env(),
+    )
+    assert again.returncode == 0, again.stderr
+    assert (out / "result.npz").is_file()

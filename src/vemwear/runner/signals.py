@@ -22,7 +22,7 @@ from __future__ import annotations
 import signal
 import sys
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from types import FrameType
 from typing import Any
 
@@ -52,20 +52,30 @@ class _State:
     stopping = False  # a signal has stopped the run: its levels are being saved
     count = 0  # signals received since
     deferred: BaseException | None = None  # a signal that landed in a finalizer, to raise
+    signal: BaseException | None = None  # the first stop signal received
 
 
 def stop_signal(exc: BaseException) -> KeyboardInterrupt | None:
     """The stop signal behind ``exc``: ``exc`` itself, or the one it was raised while
     handling (a library that fails as it unwinds from the signal, such as a zip file
-    closed while its member's handle is still open), else None."""
+    closed while its member's handle is still open), else None.
+
+    A compiled library may also replace the signal's exception by its own, with no
+    chain (matplotlib's C++ path code: ``ValueError: Invalid bounding box``): so any
+    exception raised after a stop signal within :func:`signals_as_interrupts` counts as
+    the stop (it is marked as such when it leaves the context)."""
     seen: set[int] = set()
     e: BaseException | None = exc
     while e is not None and id(e) not in seen:
         if isinstance(e, KeyboardInterrupt):
             return e
+        marked = getattr(e, "vemwear_stopped_by", None)
+        if isinstance(marked, KeyboardInterrupt):
+            return marked
         seen.add(id(e))
         e = e.__cause__ or e.__context__
-    return None
+    sig = _State.signal
+    return sig if isinstance(sig, KeyboardInterrupt) else None
 
 
 def stop_reason(exc: BaseException) -> str | None:
@@ -135,6 +145,7 @@ def _handler(signum: int, frame: FrameType | None) -> None:
     exc: BaseException = KeyboardInterrupt() if name == "SIGINT" else Terminated(name)
     if not _State.stopping:  # the first signal stops the run (after a checkpoint being saved)
         _State.stopping = True
+        _State.signal = exc
         _say(f"vemwear: {stop_reason(exc)}; stopping")
         if _State.depth == 0:
             _raise(exc, frame)
@@ -161,12 +172,19 @@ def signals_as_interrupts() -> Iterator[None]:
         pass
     try:
         yield
+    except BaseException as exc:
+        stop = stop_signal(exc)
+        if stop is not None and stop is not exc:  # still the stop once the context is left
+            with suppress(AttributeError):
+                exc.vemwear_stopped_by = stop  # type: ignore[attr-defined]
+        raise
     finally:
         if old:
             signal.setitimer(signal.ITIMER_REAL, 0)
         for sig, h in old.items():
             signal.signal(sig, h)
         _State.stopping, _State.count, _State.pending, _State.deferred = False, 0, None, None
+        _State.signal = None
 
 
 @contextmanager
