@@ -32,12 +32,11 @@ from ..util.atomic import write_atomic
 from .checkpoint import CHECKPOINT_NAME, write_adaptive_checkpoint
 from .outdir import PARTIAL_NAME, write_marker
 from .partial import (
-    WornThroughError,
     discard,
+    keep_stopped,
     output_names,
-    reason_line,
+    outputs_failed,
     worn_through,
-    write_partial,
 )
 from .run import hold_lock
 from .signals import check_stop, saving
@@ -109,14 +108,7 @@ def execute_adaptive(plan: RunPlan, *, progress: bool = True) -> list[Segment]:
         try:
             segments = _finish(plan)
         except BaseException as exc:
-            with saving(reraise=False):
-                write_partial(
-                    plan, plan.storage.n_levels, f"writing the outputs: {reason_line(exc)}"
-                )
-            exc.vemwear_note = (  # type: ignore[attr-defined]
-                f"; every time level is solved and saved in {plan.out}; write the outputs "
-                f"with: {plan.command}"
-            )
+            outputs_failed(plan, exc)
             raise
     return segments
 
@@ -144,19 +136,7 @@ def _stop(plan: RunPlan, h5: Any, state: AdaptiveState | None, exc: BaseExceptio
     if state is None:  # no mesh change finished: nothing to go on from
         discard(plan)
         return
-    c, L = state.first, plan.storage.n_levels
-    try:
-        with saving(reraise=False):
-            write_partial(plan, c, reason_line(exc))
-        note = f"; the {c} finished time levels (of {L}) are saved in {plan.out}"
-        if not isinstance(exc, WornThroughError):
-            note += f"; continue with: {plan.command}"
-    except BaseException as err:  # a second failure must not hide the first one
-        note = f"; the {c} finished time levels could not be saved ({type(err).__name__}: {err})"
-    try:
-        exc.vemwear_note = note  # type: ignore[attr-defined]
-    except AttributeError:  # pragma: no cover - exceptions with __slots__
-        pass
+    keep_stopped(plan, state.first, exc, lambda: None)  # the stream is closed
 
 
 def _finish(plan: RunPlan) -> list[Segment]:

@@ -11,6 +11,7 @@ one mesh (:mod:`~vemwear.runner.run`) and on adaptive meshes
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any
 
@@ -19,7 +20,7 @@ import numpy as np
 from ..util.atomic import write_atomic
 from .checkpoint import CHECKPOINT_NAME
 from .outdir import LOCK_NAME, MARKER_NAME, PARTIAL_NAME, write_marker
-from .signals import check_stop, stop_reason
+from .signals import check_stop, saving, stop_reason
 
 if TYPE_CHECKING:
     from .run import RunPlan
@@ -28,7 +29,9 @@ __all__ = [
     "WearGuard",
     "WornThroughError",
     "discard",
+    "keep_stopped",
     "output_names",
+    "outputs_failed",
     "reason_line",
     "worn_through",
     "write_partial",
@@ -163,3 +166,34 @@ It refuses to start if the physics, the discretization or the kept levels change
 """
     write_atomic(plan.out / PARTIAL_NAME, text)
     write_marker(plan.out, "partial", output_names(), "run")
+
+
+def keep_stopped(plan: RunPlan, c: int, exc: BaseException, save: Callable[[], None]) -> None:
+    """Keep the ``c`` finished levels of a run stopped by ``exc``: ``save()`` (the last
+    checkpoint, the stream closed), then ``PARTIAL.txt``, in a section a first signal does
+    not interrupt; attach the one-line note saying so, and how to go on, to ``exc``."""
+    L = plan.storage.n_levels
+    try:
+        with saving(reraise=False):
+            save()
+            write_partial(plan, c, reason_line(exc))
+        note = f"; the {c} finished time levels (of {L}) are saved in {plan.out}"
+        if not isinstance(exc, WornThroughError):  # the same data would stop there again
+            note += f"; continue with: {plan.command}"
+    except BaseException as err:  # a second failure must not hide the first one
+        note = f"; the {c} finished time levels could not be saved ({type(err).__name__}: {err})"
+    try:
+        exc.vemwear_note = note  # type: ignore[attr-defined]
+    except AttributeError:  # pragma: no cover - exceptions with __slots__
+        pass
+
+
+def outputs_failed(plan: RunPlan, exc: BaseException) -> None:
+    """Writing the outputs of a run whose every level is saved failed with ``exc``: say
+    so in ``PARTIAL.txt`` and in the note on ``exc`` (``--resume`` writes them)."""
+    with saving(reraise=False):
+        write_partial(plan, plan.storage.n_levels, f"writing the outputs: {reason_line(exc)}")
+    exc.vemwear_note = (  # type: ignore[attr-defined]
+        f"; every time level is solved and saved in {plan.out}; write the outputs "
+        f"with: {plan.command}"
+    )

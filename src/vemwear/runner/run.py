@@ -60,11 +60,10 @@ from .partial import (
     WearGuard,
     WornThroughError,
     discard,
+    keep_stopped,
     output_names,
-    reason_line,
-    write_partial,
+    outputs_failed,
 )
-from .signals import saving
 
 if TYPE_CHECKING:
     from ..config import Config
@@ -366,14 +365,7 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
         try:
             result = _finish(plan, timings)
         except BaseException as exc:
-            with saving(reraise=False):
-                write_partial(
-                    plan, plan.storage.n_levels, f"writing the outputs: {reason_line(exc)}"
-                )
-            exc.vemwear_note = (  # type: ignore[attr-defined]
-                f"; every time level is solved and saved in {plan.out}; write the outputs "
-                f"with: {plan.command}"
-            )
+            outputs_failed(plan, exc)
             raise
     return result
 
@@ -381,7 +373,7 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
 def _stop(plan: RunPlan, sink: Any, exc: BaseException) -> None:
     """Keep the finished levels of a stopped run; attach a one-line note to ``exc``."""
     state: LoopState | None = getattr(exc, "loop_state", None)
-    c, L = (state.completed if state else 0), plan.storage.n_levels
+    c = state.completed if state else 0
     if state is None or (c == 0 and plan.state is None):
         try:  # nothing finished: remove what this run wrote, even if closing fails
             sink.close()
@@ -390,20 +382,12 @@ def _stop(plan: RunPlan, sink: Any, exc: BaseException) -> None:
         finally:
             discard(plan)
         return
-    try:
-        with saving(reraise=False):
-            sink.checkpoint(state)
-            sink.close()
-            write_partial(plan, c, reason_line(exc))
-        note = f"; the {c} finished time levels (of {L}) are saved in {plan.out}"
-        if not isinstance(exc, WornThroughError):  # the same data would stop there again
-            note += f"; continue with: {plan.command}"
-    except BaseException as err:  # a second failure must not hide the first one
-        note = f"; the {c} finished time levels could not be saved ({type(err).__name__}: {err})"
-    try:
-        exc.vemwear_note = note  # type: ignore[attr-defined]
-    except AttributeError:  # pragma: no cover - exceptions with __slots__
-        pass
+
+    def save() -> None:
+        sink.checkpoint(state)
+        sink.close()
+
+    keep_stopped(plan, c, exc, save)
 
 
 def abandon_run(plan: RunPlan) -> None:
