@@ -15,6 +15,8 @@ ORDER = (
     "plot_3d.py",
     "plot_pin_on_disc.py",
     "plot_hertz.py",
+    "plot_ball_on_flat.py",
+    "plot_adaptive_moving.py",
     "plot_sweep.py",
     "plot_fit.py",
 )
