@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib import colormaps
+from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 from numpy.typing import NDArray
@@ -429,7 +430,15 @@ def plot_time_history(
     ax2 = ax.twinx()
     it = np.asarray(result.iterations)
     width = np.diff(t).min(initial=1.0) * 0.8 if len(t) > 1 else 1.0
-    ax2.bar(t, it, width=width, color="0.6", alpha=0.35, label="solver iterations", zorder=0)
+    # the bars as one collection: a Rectangle artist per level took seconds at 1500 levels
+    x0, x1 = t - width / 2, t + width / 2
+    zero = np.zeros_like(t)
+    bars = np.stack([np.c_[x0, zero], np.c_[x0, it], np.c_[x1, it], np.c_[x1, zero]], axis=1)
+    ax2.add_collection(
+        PolyCollection(
+            bars, facecolors="0.6", edgecolors="none", alpha=0.35, label="solver iterations"
+        )
+    )
     ax2.set_ylabel("solver iterations per level")
     ax2.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax2.set_ylim(0, max(int(it.max(initial=1)), 1) * 2.2)
