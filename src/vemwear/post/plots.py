@@ -436,7 +436,7 @@ def plot_time_history(
     bars = np.stack([np.c_[x0, zero], np.c_[x0, it], np.c_[x1, it], np.c_[x1, zero]], axis=1)
     ax2.add_collection(
         PolyCollection(
-            bars, facecolors="0.6", edgecolors="none", alpha=0.35, label="solver iterations"
+            list(bars), facecolors="0.6", edgecolors="none", alpha=0.35, label="solver iterations"
         )
     )
     ax2.set_ylabel("solver iterations per level")
