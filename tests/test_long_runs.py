@@ -73,9 +73,10 @@ def reference(config: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[st
     return arrays(out)
 
 
-#: Steps of the run killed with SIGKILL: long enough (about 2.5 s here) that the kill
-#: lands well inside the time loop on a faster machine too.
-KILL_STEPS = 150000
+#: Steps of the run killed with SIGKILL: long enough (a time loop of about 5 s here, its
+#: first checkpoint after 0.2 s) that the kill lands well inside the time loop on a
+#: faster machine too.
+KILL_STEPS = 60000
 
 
 @pytest.fixture(scope="module")
