@@ -203,3 +203,55 @@ def test_sigterm_replaced_by_a_libraries_own_error_is_a_stop_then_resume(
     )
     assert again.returncode == 0, again.stderr
     assert (out / "result.npz").is_file()
+
+
+IN_SAVEFIG_SWALLOWED = textwrap.dedent(
+    """
+    import os, signal, sys, time
+    import matplotlib.figure
+    from vemwear.cli.main import main
+
+    savefig = matplotlib.figure.Figure.savefig
+    sent = []
+
+    def savefig_swallowing(self, *args, **kwargs):
+        # a library that catches the signal's exception and goes on
+        if not sent:
+            sent.append(1)
+            try:
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(5)
+            except KeyboardInterrupt:
+                pass
+        return savefig(self, *args, **kwargs)
+
+    matplotlib.figure.Figure.savefig = savefig_swallowing
+    sys.exit(main(sys.argv[1:]))
+    """
+)
+
+
+def test_sigterm_swallowed_by_a_library_stops_at_the_next_file(tmp_path: Path) -> None:
+    """A library that catches the signal's exception and goes on (here in the first
+    figure): the run still stops at the next safe point, between two output files, with
+    exit 130; the files after it are not written; --resume writes them."""
+    cfg = tmp_path / "small.toml"
+    cfg.write_text(small_config("small", steps=4, output={"figures": True}))
+    out = tmp_path / "out"
+    script = tmp_path / "swallowed.py"
+    script.write_text(IN_SAVEFIG_SWALLOWED)
+    run = [str(cfg), "-o", str(out), "--no-progress"]
+    done = subprocess.run(
+        [sys.executable, str(script), "run", *run], capture_output=True, text=True, env=_env()
+    )
+    assert done.returncode == 130, done.stderr
+    assert "every time level is solved and saved" in done.stderr, done.stderr
+    assert not (out / "forces.png").exists() and (out / "PARTIAL.txt").is_file()
+    again = subprocess.run(
+        [sys.executable, "-m", "vemwear", "run", *run, "--resume"],
+        capture_output=True,
+        text=True,
+        env=_env(),
+    )
+    assert again.returncode == 0, again.stderr
+    assert (out / "forces.png").is_file()

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -40,6 +40,7 @@ def write_outputs(
     vtk: bool = True,
     paraview: str = "xdmf",
     extra: dict[str, Any] | None = None,
+    between: Callable[[], None] | None = None,
 ) -> dict[str, list[str]]:
     """Write the standard output of one run into an existing directory.
 
@@ -68,6 +69,8 @@ def write_outputs(
         Format of the ParaView series.
     extra : dict, optional
         Stored under ``inputs.extra`` in ``summary.json``.
+    between : callable, optional
+        Called after each file (a safe point where a caller's stop request is raised).
 
     Returns
     -------
@@ -76,23 +79,29 @@ def write_outputs(
     """
     from .. import post
 
+    step = between or (lambda: None)
     out = Path(outdir)
     written: dict[str, list[str]] = {"data": [], "figures": [], "vtk": []}
     post.save_result(result, out, extra=extra)
     written["data"] += ["result.npz", "summary.json"]
+    step()
     if result.problem.dim == 3:
         return _outputs3d(result, out, written, times, figures, vtk)
     if figures:
+        from .forces import plot_forces
+
         _use_agg()
         last = len(result.t) - 1
         tl = list(times) if len(times) else [float(result.t[-1])]
-        post.plot_contact_profiles(result, tl, out / FIGURE_NAMES["contact_profiles"])
-        post.plot_displacement(result, last, out / FIGURE_NAMES["displacement"])
-        post.plot_deformed(result, last, out / FIGURE_NAMES["deformed"])
-        post.plot_time_history(result, out / FIGURE_NAMES["time_history"])
-        from .forces import plot_forces
-
-        plot_forces(result, out / FIGURE_NAMES["forces"])
+        for draw in (
+            lambda: post.plot_contact_profiles(result, tl, out / FIGURE_NAMES["contact_profiles"]),
+            lambda: post.plot_displacement(result, last, out / FIGURE_NAMES["displacement"]),
+            lambda: post.plot_deformed(result, last, out / FIGURE_NAMES["deformed"]),
+            lambda: post.plot_time_history(result, out / FIGURE_NAMES["time_history"]),
+            lambda: plot_forces(result, out / FIGURE_NAMES["forces"]),
+        ):
+            draw()
+            step()
         written["figures"] += list(FIGURE_NAMES.values())
     if vtk and paraview == "xdmf":
         from .xdmf import write_xdmf_series

@@ -64,6 +64,7 @@ from .partial import (
     output_names,
     outputs_failed,
 )
+from .signals import check_stop
 
 if TYPE_CHECKING:
     from ..config import Config
@@ -441,6 +442,7 @@ def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
         figures=cfg.output.figures,
         vtk=cfg.output.vtk,
         extra=extra,
+        between=check_stop,  # safe points between the files
         **({"paraview": cfg.output.paraview} if hasattr(cfg.output, "paraview") else {}),
     )
     files = [STREAM_NAME, *(f.split("/")[0] for names in written.values() for f in names)]

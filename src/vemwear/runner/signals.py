@@ -132,12 +132,15 @@ def _retry(signum: int, frame: FrameType | None) -> None:
 
 
 def check_stop() -> None:
-    """A safe point: raise the stop signal that landed in a finalizer, if any."""
+    """A safe point: raise the stop signal that landed in a finalizer, if any, or one
+    that a library swallowed (a stop signal was received, yet the run goes on here)."""
     exc = _State.deferred
     if exc is not None:
         _State.deferred = None
         signal.setitimer(signal.ITIMER_REAL, 0)
         raise exc
+    if _State.stopping and _State.depth == 0 and _State.signal is not None:
+        raise _State.signal
 
 
 def _handler(signum: int, frame: FrameType | None) -> None:
