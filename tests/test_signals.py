@@ -122,29 +122,46 @@ IN_ZIP_CLOSE = textwrap.dedent(
 )
 
 
-def test_sigterm_while_a_zip_member_is_closed_is_a_stop_then_resume(tmp_path: Path) -> None:
-    """A signal raised inside ``zipfile``'s member close makes ``numpy.savez`` fail with
-    a ValueError (the zip closed with a handle open) whose context is the signal: the
-    run is stopped (exit 130, its levels saved), not an internal error, and resumes."""
+def _stopped_in_the_final_writes(tmp_path: Path, script: str, figures: bool) -> Path:
+    """Run a small case through ``script`` (the CLI with a library patched to meet a
+    SIGTERM in the final writes) and check the stop: exit 130, every level saved,
+    ``PARTIAL.txt`` naming the signal. Returns OUTDIR as the stop left it."""
     cfg = tmp_path / "small.toml"
-    cfg.write_text(small_config("small", steps=4))
+    cfg.write_text(small_config("small", steps=4, output={"figures": figures}))
     out = tmp_path / "out"
-    script = tmp_path / "in_zip_close.py"
-    script.write_text(IN_ZIP_CLOSE)
-    run = [str(cfg), "-o", str(out), "--no-progress"]
+    path = tmp_path / "patched.py"
+    path.write_text(script)
     done = subprocess.run(
-        [sys.executable, str(script), "run", *run], capture_output=True, text=True, env=_env()
+        [sys.executable, str(path), "run", str(cfg), "-o", str(out), "--no-progress"],
+        capture_output=True,
+        text=True,
+        env=_env(),
     )
     assert done.returncode == 130, done.stderr
     assert "interrupted; every time level is solved and saved" in done.stderr, done.stderr
+    assert "terminated (SIGTERM)" in (out / "PARTIAL.txt").read_text()
+    return out
+
+
+def _resume(out: Path) -> None:
+    """``--resume`` of the stopped run of :func:`_stopped_in_the_final_writes` completes."""
+    cfg = out.parent / "small.toml"
+    cmd = [sys.executable, "-m", "vemwear", "run", str(cfg), "-o", str(out), "--no-progress"]
     again = subprocess.run(
-        [sys.executable, "-m", "vemwear", "run", *run, "--resume"],
+        [*cmd, "--resume"],
         capture_output=True,
         text=True,
         env=_env(),
     )
     assert again.returncode == 0, again.stderr
-    assert (out / "result.npz").is_file()
+    assert (out / "result.npz").is_file() and not (out / "PARTIAL.txt").exists()
+
+
+def test_sigterm_while_a_zip_member_is_closed_is_a_stop_then_resume(tmp_path: Path) -> None:
+    """A signal raised inside ``zipfile``'s member close makes ``numpy.savez`` fail with
+    a ValueError (the zip closed with a handle open) whose context is the signal: the
+    run is stopped (exit 130, its levels saved), not an internal error, and resumes."""
+    _resume(_stopped_in_the_final_writes(tmp_path, IN_ZIP_CLOSE, figures=False))
 
 
 IN_SAVEFIG = textwrap.dedent(
@@ -183,26 +200,7 @@ def test_sigterm_replaced_by_a_libraries_own_error_is_a_stop_then_resume(
     """A signal that a compiled library turns into its own exception, with no chain to the
     signal, during the final writes: still a stop (exit 130, every level saved), not an
     internal error; --resume writes the outputs."""
-    cfg = tmp_path / "small.toml"
-    cfg.write_text(small_config("small", steps=4, output={"figures": True}))
-    out = tmp_path / "out"
-    script = tmp_path / "in_savefig.py"
-    script.write_text(IN_SAVEFIG)
-    run = [str(cfg), "-o", str(out), "--no-progress"]
-    done = subprocess.run(
-        [sys.executable, str(script), "run", *run], capture_output=True, text=True, env=_env()
-    )
-    assert done.returncode == 130, done.stderr
-    assert "every time level is solved and saved" in done.stderr, done.stderr
-    assert "terminated (SIGTERM)" in (out / "PARTIAL.txt").read_text()
-    again = subprocess.run(
-        [sys.executable, "-m", "vemwear", "run", *run, "--resume"],
-        capture_output=True,
-        text=True,
-        env=_env(),
-    )
-    assert again.returncode == 0, again.stderr
-    assert (out / "result.npz").is_file()
+    _resume(_stopped_in_the_final_writes(tmp_path, IN_SAVEFIG, figures=True))
 
 
 IN_SAVEFIG_SWALLOWED = textwrap.dedent(
@@ -235,23 +233,7 @@ def test_sigterm_swallowed_by_a_library_stops_at_the_next_file(tmp_path: Path) -
     """A library that catches the signal's exception and goes on (here in the first
     figure): the run still stops at the next safe point, between two output files, with
     exit 130; the files after it are not written; --resume writes them."""
-    cfg = tmp_path / "small.toml"
-    cfg.write_text(small_config("small", steps=4, output={"figures": True}))
-    out = tmp_path / "out"
-    script = tmp_path / "swallowed.py"
-    script.write_text(IN_SAVEFIG_SWALLOWED)
-    run = [str(cfg), "-o", str(out), "--no-progress"]
-    done = subprocess.run(
-        [sys.executable, str(script), "run", *run], capture_output=True, text=True, env=_env()
-    )
-    assert done.returncode == 130, done.stderr
-    assert "every time level is solved and saved" in done.stderr, done.stderr
-    assert not (out / "forces.png").exists() and (out / "PARTIAL.txt").is_file()
-    again = subprocess.run(
-        [sys.executable, "-m", "vemwear", "run", *run, "--resume"],
-        capture_output=True,
-        text=True,
-        env=_env(),
-    )
-    assert again.returncode == 0, again.stderr
+    out = _stopped_in_the_final_writes(tmp_path, IN_SAVEFIG_SWALLOWED, figures=True)
+    assert not (out / "forces.png").exists()  # stopped before the last figure
+    _resume(out)
     assert (out / "forces.png").is_file()
