@@ -311,3 +311,23 @@ def test_sigterm_keeps_the_finished_meshes_and_says_how_to_resume(tmp_path: Path
     outcome = run_config(config, out, resume=True, progress=False)
     assert outcome.resumed_from == 2 * done and outcome.segments is not None
     assert outcome.segments[-1].last == KILL_STEPS and not (out / "PARTIAL.txt").exists()
+
+
+def test_wear_beyond_the_layer_stops_at_its_first_level(tmp_path: Path) -> None:
+    """A wear that passes the layer's thickness g stops the adaptive run (exit 3) at the
+    first level where it does, the one simulate_adaptive's arrays show."""
+    config = tmp_path / "worn.toml"
+    config.write_text(small_config("worn", steps=8, contact={"kappa": 40.0}) + ADAPT)
+    done = subprocess.run(_cli(config, tmp_path / "out"), capture_output=True, text=True)
+    assert done.returncode == 3, done.stderr
+    said = done.stderr.split("exceeds the layer thickness at time level ")[1]
+    cfg = load_config(config)
+    assert cfg.adapt is not None
+    segs = simulate_adaptive(cfg.problem, **dataclasses.asdict(cfg.adapt), solver=cfg.solver)
+    first = min(
+        lv
+        for k, s in enumerate(segs)
+        for lv in range(s.first, s.last + (k == len(segs) - 1))
+        if np.any(s.result.wear[int(np.searchsorted(s.result.levels, lv))] > s.problem.nodal["g"])
+    )
+    assert said.startswith(f"{first} "), said

@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .adapt import CellTree, neighbour_pairs
 from .polymesh import Mesh, MeshError
-from .refine import _corners
+from .refine import corners
 
 __all__ = ["coarsen_tree", "coarsening_marking"]
 
@@ -159,7 +159,7 @@ def _drop_unneeded(mesh: Mesh, cells: list[list[int]]) -> Mesh:
     # a vertex is needed where some cell turns at it
     need = np.zeros(mesh.n_points, dtype=bool)
     for _n, (_ids, verts) in tmp.groups.items():
-        corner = _corners(mesh.points[verts])
+        corner = corners(mesh.points[verts])
         need[verts[corner]] = True
     used = np.zeros(mesh.n_points, dtype=bool)
     used[tmp.cell_vertices] = True

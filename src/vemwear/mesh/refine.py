@@ -39,7 +39,7 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
-def _corners(X: FloatArray) -> NDArray[np.bool_]:
+def corners(X: FloatArray) -> NDArray[np.bool_]:
     """Geometric corners of polygons ``X`` (m, n, 2) (vertices where the boundary turns)."""
     e_in = X - np.roll(X, 1, axis=1)
     e_out = np.roll(X, -1, axis=1) - X
@@ -138,7 +138,7 @@ def refine_cells(
         new_pts.append(np.asarray(xy, dtype=float))
         return nP + len(new_pts) - 1
 
-    is_corner = _per_cell(mesh, sel, lambda X, _ids: _corners(X))
+    is_corner = _per_cell(mesh, sel, lambda X, _ids: corners(X))
     for c in sel.tolist():
         V = mesh.cell(c)
         X = P[V]

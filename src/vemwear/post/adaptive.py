@@ -23,7 +23,6 @@ first and the last mesh.
 from __future__ import annotations
 
 import os
-import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -33,9 +32,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..mesh.io import to_meshio
-from ..util.atomic import write_atomic
 from ..vem.projection import Projection
-from .vtk import _block_order, _pvd_text, level_fields
+from .vtk import _block_order, finish_series, level_fields, series_dir
 
 if TYPE_CHECKING:
     from ..simulate.adaptive_time import Segment
@@ -112,13 +110,9 @@ def write_adaptive_series(
     Path
         The ``.pvd`` file.
     """
-    if not name or os.sep in name or (os.altsep and os.altsep in name):
-        raise ValueError(f"vtk: series name must be a plain file name, got {name!r}")
     if not segments:
         raise ValueError("vtk: an adaptive run without segments")
-    out = Path(outdir)
-    sub = out / name
-    sub.mkdir(parents=True, exist_ok=True)
+    out, sub = series_dir(outdir, name)
     width = max(4, len(str(segments[-1].last)))
     entries: list[tuple[float, str]] = []
     for k, seg in enumerate(segments):
@@ -141,14 +135,7 @@ def write_adaptive_series(
             m = meshio.Mesh(base.points, base.cells, point_data=point_data, cell_data=cell_data)
             meshio.write(sub / fname, m, file_format="vtu")
             entries.append((float(res.t[row]), f"{name}/{fname}"))
-    written = {Path(f).name for _t, f in entries}
-    pattern = re.compile(re.escape(name) + r"_\d+\.vtu")
-    for stale in sub.iterdir():
-        if stale.is_file() and pattern.fullmatch(stale.name) and stale.name not in written:
-            stale.unlink()
-    pvd = out / f"{name}.pvd"
-    write_atomic(pvd, _pvd_text(entries))
-    return pvd
+    return finish_series(out, name, entries)
 
 
 def plot_adaptive_profiles(

@@ -200,24 +200,36 @@ def write_series(
     each chosen level into ``outdir/<name>/``; stale ``<name>_<digits>.vtu`` files there
     are removed and ``outdir/<name>.pvd`` is written last, atomically (the skeleton of
     :func:`write_vtk_series` and of the 3D series of :mod:`vemwear.post.vtk3d`)."""
-    if not name or os.sep in name or (os.altsep and os.altsep in name):
-        raise ValueError(f"vtk: series name must be a plain file name, got {name!r}")
-    out = Path(outdir)
-    sub = out / name
-    sub.mkdir(parents=True, exist_ok=True)
+    out, sub = series_dir(outdir, name)
     L = len(result.t)
     # by default every level whose displacement was stored
     chosen = [int(v) for v in result.u_levels] if levels is None else _levels(levels, L)
     width = max(4, len(str(L - 1)))
     entries: list[tuple[float, str]] = []
-    written: set[str] = set()
     for lv in chosen:
         fname = f"{name}_{lv:0{width}d}.vtu"
         write_level(lv, sub / fname)
-        written.add(fname)
         entries.append((float(result.t[lv]), f"{name}/{fname}"))
+    return finish_series(out, name, entries)
+
+
+def series_dir(outdir: str | os.PathLike[str], name: str) -> tuple[Path, Path]:
+    """``outdir`` and the directory ``outdir/<name>`` of a series' ``.vtu`` files (made
+    if missing); ``name`` must be a plain file name."""
+    if not name or os.sep in name or (os.altsep and os.altsep in name):
+        raise ValueError(f"vtk: series name must be a plain file name, got {name!r}")
+    out = Path(outdir)
+    (out / name).mkdir(parents=True, exist_ok=True)
+    return out, out / name
+
+
+def finish_series(out: Path, name: str, entries: list[tuple[float, str]]) -> Path:
+    """End a series whose ``.vtu`` files ``entries`` ((t, relative path)) are written:
+    remove stale ``<name>_<digits>.vtu`` files of an earlier series, then write
+    ``out/<name>.pvd`` atomically (last: a reader never sees a missing level)."""
+    written = {Path(f).name for _t, f in entries}
     pattern = re.compile(re.escape(name) + r"_\d+\.vtu")
-    for stale in sub.iterdir():
+    for stale in (out / name).iterdir():
         if stale.is_file() and pattern.fullmatch(stale.name) and stale.name not in written:
             stale.unlink()
     pvd = out / f"{name}.pvd"

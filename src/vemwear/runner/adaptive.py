@@ -121,10 +121,11 @@ def _check_wear(seg: Segment, final: bool) -> None:
     """Stop at the first owned level whose wear exceeds the layer's thickness g."""
     res, g = seg.result, seg.problem.nodal["g"]
     assert res.levels is not None
-    for lv in range(seg.first, seg.last + 1 if final else seg.last):
-        w = res.wear[int(np.searchsorted(res.levels, lv))]
-        if np.any(w > g):
-            raise worn_through(seg.problem, lv, w, g)
+    owned = np.arange(seg.first, seg.last + 1 if final else seg.last)
+    rows = np.searchsorted(res.levels, owned)
+    over = np.flatnonzero(np.any(res.wear[rows] > g, axis=1))
+    if len(over):
+        raise worn_through(seg.problem, int(owned[over[0]]), res.wear[rows[over[0]]], g)
 
 
 def _stop(plan: RunPlan, h5: Any, state: AdaptiveState | None, exc: BaseException) -> None:
