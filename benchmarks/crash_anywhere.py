@@ -200,8 +200,11 @@ def _kill(cmd: list[str], delay: float, sig: signal.Signals) -> tuple[int | None
         if proc.poll() is None:
             proc.kill()
             proc.wait()
-    last = err.decode(errors="replace").strip().splitlines()[-1:] if err else []
-    return proc.returncode, time.monotonic() - t0, last[0] if last else ""
+    lines = err.decode(errors="replace").strip().splitlines() if err else []
+    fatal = [i for i, line in enumerate(lines) if line.startswith("Fatal Python error")]
+    if fatal:  # the interpreter's own account, and the Python frames it printed
+        return proc.returncode, time.monotonic() - t0, " | ".join(lines[fatal[0] :][:12])
+    return proc.returncode, time.monotonic() - t0, lines[-1] if lines else ""
 
 
 def _no_stray(out: Path, names: set[str]) -> str:
@@ -229,7 +232,7 @@ def trial(
     state = "export" if kind == "export" else _state(out, rc)
     why = ""
     if sig == signal.SIGTERM and rc not in (0, 130, -signal.SIGTERM):
-        why = f"SIGTERM: exit {rc}: {said[-300:]}"
+        why = f"SIGTERM: exit {rc}: {said[-1200:]}"
     elif sig == signal.SIGTERM and rc != 0 and stop > STOP_WITHIN:
         why = f"SIGTERM took {stop:.2f} s"  # (a command that completed is not stopped)
     if not why:

@@ -1,5 +1,5 @@
 """``python -m vemwear``: the command-line interface."""
 
-from vemwear.cli.main import main
+from vemwear.cli.main import entry
 
-raise SystemExit(main())
+entry()

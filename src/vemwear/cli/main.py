@@ -17,11 +17,14 @@ from __future__ import annotations
 
 import argparse
 import errno
+import logging
 import os
 import sys
 import traceback
 import warnings
 from collections.abc import Callable, Sequence
+from contextlib import suppress
+from typing import NoReturn
 
 from .. import __version__
 from . import mesh_cmd, outdir_cmd, paper_cmd, run_cmd, study_cmd
@@ -228,8 +231,27 @@ def main(argv: Sequence[str] | None = None) -> int:
         return code
 
 
+def entry() -> NoReturn:
+    """The ``vemwear`` command (console script, ``python -m vemwear``): :func:`main`, exit.
+
+    A stopped command (130) leaves without the interpreter's teardown: its files are
+    closed and its streams flushed by then, and the teardown only joins or destroys what
+    the stop cut short (a Dask cluster's event loop and a worker being started again, or
+    a library interrupted inside a write), which took seconds, and once aborted the
+    process, turning the stop's exit code into SIGABRT's.
+    """
+    code = main()
+    if code == EXIT_INTERRUPTED:
+        for stream in (sys.stdout, sys.stderr):
+            with suppress(Exception):
+                stream.flush()
+        logging.shutdown()
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":  # pragma: no cover
     # ``python -m vemwear.cli.main``: run the imported module, not this copy named __main__
-    from vemwear.cli.main import main as _main
+    from vemwear.cli.main import entry as _entry
 
-    sys.exit(_main())
+    _entry()

@@ -120,31 +120,48 @@ def study_client(
     with dask.config.set(LOCAL_WORKERS):
         before = set(_clusters())
         cluster = _start_local_cluster(n)
-        with cluster, Client(cluster) as own:
-            try:
-                # the workers import the library now, as part of the cluster's start; a
-                # worker that dies meanwhile is replaced by its nanny: register again
-                for attempt in range(_STARTS):
-                    try:
-                        _prepare_workers(own)
-                        break
-                    except OSError:
-                        if attempt + 1 == _STARTS:
-                            raise
-                _tell_dashboard(own, say)
-                yield own
-            except BaseException:
-                # every cluster made here (Dask's exit hook would close one that is left
-                # with a graceful wait for a worker being started again: 10 s)
-                _forget({cluster} | (set(_clusters()) - before))
-                # closed now with short timeouts: a nanny that is starting a worker again
-                # (one killed with the client) would hold the usual close for 10 s
-                with contextlib.suppress(Exception):
-                    own.close(timeout=1)
-                with contextlib.suppress(Exception):
-                    cluster.close(timeout=1)
-                _kill_children()
-                raise
+        local: Any = None  # the client, once made
+        try:
+            local = Client(cluster)
+            # the workers import the library now, as part of the cluster's start; a
+            # worker that dies meanwhile is replaced by its nanny: register again
+            for attempt in range(_STARTS):
+                try:
+                    _prepare_workers(local)
+                    break
+                except OSError:
+                    if attempt + 1 == _STARTS:
+                        raise
+            _tell_dashboard(local, say)
+            yield local
+            local.close()
+            cluster.close()
+        except BaseException:  # a stop or an error, also during the graceful close
+            # every cluster made here (Dask's exit hook would close one that is left
+            # with a graceful wait for a worker being started again: 10 s)
+            _forget({cluster} | (set(_clusters()) - before))
+            _close_at_once(local, cluster)
+            _kill_children()
+            raise
+
+
+def _close_at_once(own: Any, cluster: Any) -> None:
+    """Close a stopped study's client and embedded cluster within about a second each.
+
+    A graceful close waits for a nanny that is starting a worker again (one killed with
+    the client), and stopping the cluster's event loop joins its thread for up to 10 s
+    while the loop's tasks are cancelled; Dask has no public bound on that join."""
+    from distributed.deploy.cluster import Cluster
+
+    if own is not None:
+        with contextlib.suppress(Exception):
+            own.close(timeout=1)
+    with contextlib.suppress(Exception):
+        Cluster.close(cluster, timeout=1)  # the base class's: no unbounded join
+    for runner in (getattr(own, "_loop_runner", None), getattr(cluster, "_loop_runner", None)):
+        if runner is not None:  # the loop's thread is a daemon: left running past 1 s
+            with contextlib.suppress(Exception):
+                runner.stop(timeout=1)
 
 
 def _start_local_cluster(n: int) -> Any:
