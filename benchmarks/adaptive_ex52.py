@@ -7,18 +7,23 @@ default 512 x 256), gives the relative L2 error along Gamma_C; the table lists t
 dofs at T, the wall time of the run (set-up included, in this process) and that error,
 for uniform meshes 64 x 32 ... 256 x 128 and for adaptive runs
 (:func:`vemwear.simulate.simulate_adaptive`: residual estimator, Doerfler marking,
-graded refinement with hanging nodes) of several settings.
+graded refinement with hanging nodes) of several settings. The runs are repeated
+``--repeat`` times, interleaved (every case once, then again), and the wall times are
+given as min / median / max; the last columns compare each run's dofs and median wall
+time with those of the uniform 256 x 128 mesh, measured in the same invocation.
 
 Usage::
 
-    python benchmarks/adaptive_ex52.py
+    python benchmarks/adaptive_ex52.py --repeat 5
     python benchmarks/adaptive_ex52.py --reference 256 --quick
 """
 
 from __future__ import annotations
 
 import argparse
+import statistics
 import time
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,12 +32,13 @@ from vemwear.paper import ex52
 from vemwear.simulate import Result, SolverOptions, simulate, simulate_adaptive
 
 STEPS = 64
+UNIFORM = (64, 128, 256)
 #: Adaptive settings: initial divisions, every, theta, max_cells, max_level.
 ADAPTIVE = [
-    ((16, 8), 8, 0.5, 1500, 4),
+    ((64, 32), 16, 0.5, 5000, None),
+    ((64, 32), 8, 0.5, 5000, None),
+    ((32, 16), 8, 0.5, 5000, None),
     ((16, 8), 4, 0.7, 20000, 6),
-    ((32, 16), 4, 0.5, 20000, 5),
-    ((32, 16), 2, 0.7, 20000, 6),
 ]
 
 
@@ -43,9 +49,29 @@ def wear_at_T(r: Result) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     return x[order], np.asarray(r.wear[-1])[order]
 
 
+def _uniform(n: int) -> Callable[[], tuple[int, Result]]:
+    def run() -> tuple[int, Result]:
+        p = ex52.problem(0.2, 2.0, divisions=(n, n // 2), steps=STEPS)
+        return p.space.n_dofs, simulate(p, SolverOptions("newton"))
+
+    return run
+
+
+def _adaptive(
+    div: tuple[int, int], every: int, theta: float, max_cells: int, level: int | None
+) -> Callable[[], tuple[int, Result]]:
+    def run() -> tuple[int, Result]:
+        p = ex52.problem(0.2, 2.0, divisions=div, steps=STEPS)
+        segs = simulate_adaptive(p, every=every, theta=theta, max_cells=max_cells, max_level=level)
+        return segs[-1].problem.space.n_dofs, segs[-1].result
+
+    return run
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--reference", type=int, default=512, help="divisions of the reference")
+    ap.add_argument("--repeat", type=int, default=3, help="interleaved repeats")
     ap.add_argument("--quick", action="store_true", help="the first two adaptive settings")
     a = ap.parse_args()
     n = a.reference
@@ -59,24 +85,35 @@ def main() -> None:
         d = np.interp(xr, x, w) - wr
         return float(np.sqrt(np.trapezoid(d**2, xr) / np.trapezoid(wr**2, xr)))
 
-    print("| mesh | dofs at T | wall time [s] | wear error |")
-    print("|---|---|---|---|")
-    for m in (64, 128, 256):
-        t0 = time.perf_counter()
-        p = ex52.problem(0.2, 2.0, divisions=(m, m // 2), steps=STEPS)
-        r = simulate(p, SolverOptions("newton"))
-        dt = time.perf_counter() - t0
-        print(f"| uniform {m} x {m // 2} | {p.space.n_dofs} | {dt:.2f} | {error(r):.2e} |")
+    cases: dict[str, Callable[[], tuple[int, Result]]] = {
+        f"uniform {m} x {m // 2}": _uniform(m) for m in UNIFORM
+    }
     for div, every, theta, max_cells, level in ADAPTIVE[: 2 if a.quick else None]:
-        t0 = time.perf_counter()
-        p = ex52.problem(0.2, 2.0, divisions=div, steps=STEPS)
-        segs = simulate_adaptive(p, every=every, theta=theta, max_cells=max_cells, max_level=level)
-        dt = time.perf_counter() - t0
-        last = segs[-1]
+        name = f"adaptive from {div[0]} x {div[1]}, every {every}, theta {theta}, max_cells {max_cells}"
+        cases[name + (f", max level {level}" if level is not None else "")] = _adaptive(
+            div, every, theta, max_cells, level
+        )
+    times: dict[str, list[float]] = {k: [] for k in cases}
+    found: dict[str, tuple[int, float]] = {}
+    for _ in range(a.repeat):
+        for name, run in cases.items():
+            t0 = time.perf_counter()
+            dofs, r = run()
+            times[name].append(time.perf_counter() - t0)
+            found[name] = (dofs, error(r))
+    base = f"uniform {UNIFORM[-1]} x {UNIFORM[-1] // 2}"
+    dofs0, med0 = found[base][0], statistics.median(times[base])
+    print(
+        "| mesh | dofs at T | wall time [s] min / median / max | wear error | "
+        "dofs / uniform 256 | time / uniform 256 |"
+    )
+    print("|---|---|---|---|---|---|")
+    for name, ts in times.items():
+        dofs, err = found[name]
+        med = statistics.median(ts)
         print(
-            f"| adaptive from {div[0]} x {div[1]}, every {every}, theta {theta}, "
-            f"max_cells {max_cells}, max level {level} | {last.problem.space.n_dofs} | "
-            f"{dt:.2f} | {error(last.result):.2e} |"
+            f"| {name} | {dofs} | {min(ts):.2f} / {med:.2f} / {max(ts):.2f} | {err:.2e} | "
+            f"1/{dofs0 / dofs:.1f} | 1/{med0 / med:.1f} |"
         )
 
 
