@@ -35,10 +35,10 @@ STEPS = 64
 UNIFORM = (64, 128, 256)
 #: Adaptive settings: initial divisions, every, theta, max_cells, max_level.
 ADAPTIVE = [
+    ((64, 32), 16, 0.4, 5000, None),
+    ((48, 24), 16, 0.5, 5000, None),
     ((64, 32), 16, 0.5, 5000, None),
-    ((64, 32), 8, 0.5, 5000, None),
     ((32, 16), 8, 0.5, 5000, None),
-    ((16, 8), 4, 0.7, 20000, 6),
 ]
 
 
