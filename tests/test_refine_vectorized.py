@@ -132,7 +132,9 @@ def test_slid_hanging_nodes_match_the_loop(name, seed):
     for _ in range(4):
         mesh = _slide_hanging(mesh, rng)
         cells = np.sort(rng.choice(mesh.n_cells, size=mesh.n_cells // 2, replace=False))
-        mids = refine_mod._midpoints(mesh, refine_mod._sides(mesh, cells))
+        mids = refine_mod._midpoints(
+            mesh, refine_mod._sides(mesh, cells, refine_mod._batches(mesh, cells))
+        )
         two_on_one_edge += mids.code.size - np.unique(mids.code).size
         mesh = _assert_same(mesh, cells)
         _check_geometry(mesh)
@@ -182,3 +184,15 @@ def test_too_few_corners_named_as_before():
     with pytest.raises(MeshError) as ref:
         refine_cells_reference(mesh, [0, 1])
     assert str(new.value) == str(ref.value) == "cell 1 has fewer than three corners"
+
+
+def test_every_midpoint_an_existing_vertex():
+    """Squares whose four sides all carry a hanging node at their middle: no new point
+    but the centres."""
+    mesh = tag_rectangle(squares_with_hanging_nodes(RECT, (6, 4), "checkerboard"))
+    cells = np.flatnonzero(mesh.cell_sizes == 8)
+    assert cells.size > 0
+    new = _assert_same(mesh, cells)
+    assert new.n_points == mesh.n_points + cells.size
+    assert new.n_cells == mesh.n_cells + 3 * cells.size
+    _check_geometry(new)

@@ -76,16 +76,14 @@ def _centres(X: FloatArray, diam: FloatArray) -> FloatArray:
     return c
 
 
-def _per_cell(
-    mesh: Mesh, cells: IntArray, fn: Callable[[FloatArray, IntArray], NDArray]
-) -> list[tuple[IntArray, NDArray]]:
-    """``fn(vertex coordinates (m, n, 2), cell ids)`` for the given cells, batched by
-    vertex count; ``[(cell ids, rows of the result)]``, one pair per batch."""
-    out: list[tuple[IntArray, NDArray]] = []
+def _batches(mesh: Mesh, cells: IntArray) -> list[tuple[IntArray, FloatArray]]:
+    """The given cells batched by vertex count: ``[(cell ids, vertex coordinates (m, n,
+    2))]``, in the order of :attr:`~vemwear.mesh.polymesh.Mesh.groups`."""
+    out: list[tuple[IntArray, FloatArray]] = []
     for ids, verts in mesh.groups.values():
         mine = _isin(ids, cells)
         if np.any(mine):
-            out.append((ids[mine], fn(mesh.points[verts[mine]], ids[mine])))
+            out.append((ids[mine], mesh.points[verts[mine]]))
     return out
 
 
@@ -135,10 +133,11 @@ def refine_cells(
     if sel.size == 0:
         same = np.arange(mesh.n_cells, dtype=np.int64)
         return (mesh, same) if return_parent else mesh
-    sides = _sides(mesh, sel)
+    batches = _batches(mesh, sel)
+    sides = _sides(mesh, sel, batches)
     centres = np.empty((mesh.n_cells, 2))
-    for ids, c in _per_cell(mesh, sel, lambda X, ids: _centres(X, mesh.cell_diameters[ids])):
-        centres[ids] = c
+    for ids, X in batches:
+        centres[ids] = _centres(X, mesh.cell_diameters[ids])
     mids = _midpoints(mesh, sides)
     points = np.vstack([mesh.points, mids.xy, centres[sel]])
     offsets, vertices, parent = _split(mesh, sel, sides, mids)
@@ -172,12 +171,13 @@ class _Mids:
     t: FloatArray  # (m,) its parameter along that edge from min to max
 
 
-def _sides(mesh: Mesh, sel: IntArray) -> _Sides:
-    """The sides of the cells ``sel`` (sorted, distinct) between their corners."""
+def _sides(mesh: Mesh, sel: IntArray, batches: list[tuple[IntArray, FloatArray]]) -> _Sides:
+    """The sides of the cells ``sel`` (sorted, distinct; ``batches`` of them by vertex
+    count) between their corners."""
     off = mesh.cell_offsets
     flag = np.zeros(mesh.cell_vertices.size, dtype=bool)
-    for ids, fl in _per_cell(mesh, sel, lambda X, _ids: corners(X)):
-        flag[off[ids][:, None] + np.arange(fl.shape[1])] = fl
+    for ids, X in batches:
+        flag[off[ids][:, None] + np.arange(X.shape[1])] = corners(X)
     n = mesh.cell_sizes[sel]
     begin = np.cumsum(n) - n
     rows = _ranges(off[sel], n)
