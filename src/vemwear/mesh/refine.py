@@ -18,11 +18,16 @@ part code of its parent edge in both halves.
 The centre is the centroid when it lies strictly inside the kernel of the cell
 (always true for convex cells), otherwise the centre of the largest disk in the
 kernel (see :func:`~vemwear.mesh.quality.kernel_disks`).
+
+All refined cells are handled at once on the flat arrays of the mesh (sides, midpoints,
+the new vertex lists), with the floating-point operations of a loop over the cells and
+their sides in the same order, so the points are those of one cell at a time to the bit.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Literal, overload
 
 import numpy as np
@@ -71,18 +76,21 @@ def _centres(X: FloatArray, diam: FloatArray) -> FloatArray:
     return c
 
 
-def _per_cell(
-    mesh: Mesh, cells: IntArray, fn: Callable[[FloatArray, IntArray], NDArray]
-) -> dict[int, NDArray]:
-    """``fn(vertex coordinates (m, n, 2), cell ids)`` for the given cells, batched by
-    vertex count; ``{cell: row of the result}``."""
-    out: dict[int, NDArray] = {}
+def _batches(mesh: Mesh, cells: IntArray) -> list[tuple[IntArray, FloatArray]]:
+    """The given cells batched by vertex count: ``[(cell ids, vertex coordinates (m, n,
+    2))]``, in the order of :attr:`~vemwear.mesh.polymesh.Mesh.groups`."""
+    out: list[tuple[IntArray, FloatArray]] = []
     for ids, verts in mesh.groups.values():
         mine = _isin(ids, cells)
         if np.any(mine):
-            res = fn(mesh.points[verts[mine]], ids[mine])
-            out.update(zip(ids[mine].tolist(), res, strict=True))
+            out.append((ids[mine], mesh.points[verts[mine]]))
     return out
+
+
+def _ranges(starts: IntArray, counts: IntArray) -> IntArray:
+    """The concatenated ranges ``starts[i], ..., starts[i] + counts[i] - 1``."""
+    first = np.cumsum(counts) - counts
+    return np.arange(int(counts.sum()), dtype=np.int64) + np.repeat(starts - first, counts)
 
 
 @overload
@@ -125,114 +133,205 @@ def refine_cells(
     if sel.size == 0:
         same = np.arange(mesh.n_cells, dtype=np.int64)
         return (mesh, same) if return_parent else mesh
+    batches = _batches(mesh, sel)
+    sides = _sides(mesh, sel, batches)
+    centres = np.empty((mesh.n_cells, 2))
+    for ids, X in batches:
+        centres[ids] = _centres(X, mesh.cell_diameters[ids])
+    mids = _midpoints(mesh, sides)
+    points = np.vstack([mesh.points, mids.xy, centres[sel]])
+    offsets, vertices, parent = _split(mesh, sel, sides, mids)
+    pid = mesh.n_points + np.arange(mids.code.size)
+    new_mesh = _carry_tags(mesh, Mesh(points, offsets, vertices), mids.code, pid)
+    return (new_mesh, parent) if return_parent else new_mesh
+
+
+@dataclass(frozen=True)
+class _Sides:
+    """The geometric sides of the refined cells: every refined cell's positions in
+    ``cell_vertices`` turned to start at its first corner, the cells in increasing order,
+    so that each side is a run of positions from its corner up to the next corner."""
+
+    row: IntArray  # (n,) the position in cell_vertices of every turned position
+    nxt: IntArray  # (n,) the next turned position of the same cell (cyclic)
+    start: IntArray  # (n_sides,) the turned position of every side's first corner
+    last: IntArray  # (n_sides,) the turned position where every side's last edge starts
+    first: IntArray  # (n_refined + 1,) offsets of the sides of every refined cell
+
+
+@dataclass(frozen=True)
+class _Mids:
+    """The midpoints of the sides: an existing vertex, or a new point on a mesh edge."""
+
+    hit: NDArray[np.bool_]  # (n_sides,) whether it is an existing vertex
+    at: IntArray  # (n_sides,) its turned position if hit, else that of the edge holding it
+    new: IntArray  # (n_sides,) the new point it is (0..m-1), -1 if hit
+    xy: FloatArray  # (m, 2) the new points, numbered from mesh.n_points on
+    code: IntArray  # (m,) key min * nk + max of the mesh edge (min, max) holding each
+    t: FloatArray  # (m,) its parameter along that edge from min to max
+
+
+def _sides(mesh: Mesh, sel: IntArray, batches: list[tuple[IntArray, FloatArray]]) -> _Sides:
+    """The sides of the cells ``sel`` (sorted, distinct; ``batches`` of them by vertex
+    count) between their corners."""
+    off = mesh.cell_offsets
+    flag = np.zeros(mesh.cell_vertices.size, dtype=bool)
+    for ids, X in batches:
+        flag[off[ids][:, None] + np.arange(X.shape[1])] = corners(X)
+    n = mesh.cell_sizes[sel]
+    begin = np.cumsum(n) - n
+    rows = _ranges(off[sel], n)
+    k = np.add.reduceat(flag[rows].astype(np.int64), begin)
+    if np.any(k < 3):
+        raise MeshError(f"cell {sel[np.argmax(k < 3)]} has fewer than three corners")
+    local = rows - np.repeat(off[sel], n)
+    corner0 = local[np.flatnonzero(flag[rows])[np.cumsum(k) - k]]
+    nn = np.repeat(n, n)
+    row = rows - local + (local + np.repeat(corner0, n)) % nn
+    nxt = np.arange(1, row.size + 1, dtype=np.int64)
+    nxt[begin + n - 1] = begin
+    start = np.flatnonzero(flag[row])
+    last = np.append(start[1:], row.size) - 1
+    return _Sides(row, nxt, start, last, np.concatenate([[0], np.cumsum(k)]))
+
+
+def _midpoints(mesh: Mesh, s: _Sides) -> _Mids:
+    """The midpoint of every side at half its length: a vertex within 1e-9 of it relative
+    to the side's length, else the middle of its two corners, one point per mesh edge
+    and parameter (within 1e-9) for the two cells sharing the edge, numbered in the
+    order of the sides."""
     P = mesh.points
-    nP = mesh.n_points
-    new_pts: list[FloatArray] = []
-    # new vertices on mesh edges: undirected edge -> list of (parameter, vertex id)
-    on_edge: dict[tuple[int, int], list[tuple[float, int]]] = {}
-    # refined cell -> ids of the midpoints of its geometric sides, and of its centre
-    mids_of: dict[int, list[int]] = {}
-    centre_of: dict[int, int] = {}
-
-    def new_point(xy: FloatArray) -> int:
-        new_pts.append(np.asarray(xy, dtype=float))
-        return nP + len(new_pts) - 1
-
-    is_corner = _per_cell(mesh, sel, lambda X, _ids: corners(X))
-    for c in sel.tolist():
-        V = mesh.cell(c)
-        X = P[V]
-        n = len(V)
-        cpos = np.flatnonzero(is_corner[c])
-        if len(cpos) < 3:
-            raise MeshError(f"cell {c} has fewer than three corners")
-        mids: list[int] = []
-        for k in range(len(cpos)):
-            a, b = cpos[k], cpos[(k + 1) % len(cpos)]
-            chain = [(a + j) % n for j in range(((b - a) % n) + 1)]  # positions a..b
-            Y = X[chain]
-            seg = np.linalg.norm(np.diff(Y, axis=0), axis=1)
-            s = np.concatenate([[0.0], np.cumsum(seg)])
-            half = 0.5 * s[-1]
-            tol = 1e-9 * s[-1]
-            hit = np.flatnonzero(np.abs(s - half) <= tol)
-            if hit.size:
-                mids.append(int(V[chain[hit[0]]]))
-                continue
-            j = int(np.searchsorted(s, half) - 1)
-            u, v = int(V[chain[j]]), int(V[chain[j + 1]])
-            xy = 0.5 * (X[a] + X[b])
-            key = (min(u, v), max(u, v))
-            pu, pv = P[key[0]], P[key[1]]
-            t = float(np.dot(xy - pu, pv - pu) / np.dot(pv - pu, pv - pu))
-            lst = on_edge.setdefault(key, [])
-            found = next((pid for (tt, pid) in lst if abs(tt - t) <= 1e-9), None)
-            if found is None:
-                found = new_point(xy)
-                lst.append((t, found))
-            mids.append(found)
-        mids_of[c] = mids
-    centres = _per_cell(mesh, sel, lambda X, ids: _centres(X, mesh.cell_diameters[ids]))
-    for c in sel.tolist():
-        centre_of[c] = new_point(centres[c])
-
-    points = np.vstack([P, *[p[None] for p in new_pts]]) if new_pts else P.copy()
-
-    # insert the new edge points into every cell that has the edge (refined or not)
-    touched = set()
-    if on_edge:
-        de = mesh.directed_edges
-        keys = np.sort(de, axis=1)
-        nk = max(nP, 1)
-        code = keys[:, 0] * nk + keys[:, 1]
-        wanted = np.array([a * nk + b for (a, b) in on_edge], dtype=np.int64)
-        rows = np.flatnonzero(_isin(code, wanted))
-        touched = set(mesh.edge_cells[rows].tolist())
-
-    def augmented(c: int) -> list[int]:
-        V = mesh.cell(c).tolist()
-        if c not in touched:
-            return V
-        out: list[int] = []
-        n = len(V)
-        for i in range(n):
-            a, b = V[i], V[(i + 1) % n]
-            out.append(a)
-            lst = on_edge.get((min(a, b), max(a, b)))
-            if lst:
-                ts = sorted(lst) if a < b else sorted(lst, reverse=True)
-                out.extend(pid for _t, pid in ts)
-        return out
-
-    cells: list[list[int]] = []
-    parent: list[int] = []
-    selset = set(sel.tolist())
-    for c in range(mesh.n_cells):
-        W = augmented(c)
-        if c not in selset:
-            cells.append(W)
-            parent.append(c)
-            continue
-        mids, centre = mids_of[c], centre_of[c]
-        pos = {v: i for i, v in enumerate(W)}
-        nW = len(W)
-        for j in range(len(mids)):
-            start = pos[mids[j - 1]]
-            stop = pos[mids[j]]
-            length = (stop - start) % nW
-            child = [W[(start + i) % nW] for i in range(length + 1)]
-            child.append(centre)
-            cells.append(child)
-            parent.append(c)
-    new_mesh = Mesh.from_cells(points, cells)
-    new_mesh = _carry_tags(mesh, new_mesh, on_edge)
-    return (new_mesh, np.asarray(parent, dtype=np.int64)) if return_parent else new_mesh
+    V = mesh.cell_vertices[s.row]
+    X = P[V]
+    d = X[s.nxt] - X
+    seg = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+    side = np.repeat(np.arange(s.start.size), s.last - s.start + 1)
+    rank = np.arange(seg.size) - s.start[side]
+    # the length along each side, summed edge after edge as np.cumsum does (same bits)
+    cum = seg.copy()
+    by_rank = np.argsort(rank, kind="stable")
+    bounds = np.cumsum(np.bincount(rank))
+    for r in range(1, bounds.size):
+        e = by_rank[bounds[r - 1] : bounds[r]]
+        cum[e] = cum[e - 1] + seg[e]
+    length = cum[s.last]
+    half, tol = 0.5 * length, 1e-9 * length
+    near = np.abs(cum - half[side]) <= tol[side]
+    big = seg.size + 1
+    node = np.minimum.reduceat(np.where(near, rank + 1, big), s.start)
+    node[half <= tol] = 0  # the first corner is the midpoint of a side of length 0
+    hit = node < big
+    at = np.where(node == 0, s.start, s.nxt[np.minimum(s.start + node - 1, seg.size - 1)])
+    # else the edge (u, v) where the length passes half of the side's
+    below = np.add.reduceat((cum < half[side]).astype(np.int64), s.start) + (half > 0.0)
+    at = np.where(hit, at, s.start + below - 1)
+    cand = np.flatnonzero(~hit)
+    edge = at[cand]
+    u, v = V[edge], V[s.nxt[edge]]
+    lo, hi = np.minimum(u, v), np.maximum(u, v)
+    xy = 0.5 * (X[s.start[cand]] + X[s.nxt[s.last[cand]]])
+    pu, dv = P[lo], P[hi] - P[lo]
+    w = xy - pu
+    t = (w[:, 0] * dv[:, 0] + w[:, 1] * dv[:, 1]) / (dv[:, 0] * dv[:, 0] + dv[:, 1] * dv[:, 1])
+    code = lo * max(mesh.n_points, 1) + hi
+    target = _first_within(code, t)
+    creates = target == np.arange(cand.size)
+    number = np.cumsum(creates) - 1
+    new = np.full(s.start.size, -1, dtype=np.int64)
+    new[cand] = number[target]
+    return _Mids(hit, at, new, xy[creates], code[creates], t[creates])
 
 
-def _carry_tags(
-    old: Mesh, new: Mesh, on_edge: dict[tuple[int, int], list[tuple[float, int]]]
-) -> Mesh:
-    """Boundary tags of ``new`` from ``old``: a half of a split edge keeps its parent's code."""
+def _first_within(code: IntArray, t: FloatArray) -> IntArray:
+    """For every candidate point ``(edge code, parameter)`` in order, the first earlier
+    candidate of the same edge that made a point and whose parameter is within 1e-9,
+    else itself (it makes a point)."""
+    order = np.argsort(code, kind="stable")
+    ks, ts = code[order], t[order]
+    head = np.ones(ks.size, dtype=bool)
+    head[1:] = ks[1:] != ks[:-1]
+    starts = np.flatnonzero(head)
+    rank = np.arange(ks.size) - starts[np.cumsum(head) - 1]
+    target = np.arange(ks.size)
+    makes = np.ones(ks.size, dtype=bool)
+    # at most two cells of a valid mesh share an edge: one pass, a loop over ranks anyway
+    for r in range(1, int(rank.max(initial=0)) + 1):
+        idx = np.flatnonzero(rank == r)
+        found = np.full(idx.size, -1)
+        for q in range(r):
+            j = idx - (r - q)
+            ok = (found < 0) & makes[j] & (np.abs(ts[j] - ts[idx]) <= 1e-9)
+            found[ok] = j[ok]
+        makes[idx] = found < 0
+        target[idx] = np.where(found < 0, idx, found)
+    out = np.empty(ks.size, dtype=np.int64)
+    out[order] = order[target]
+    return out
+
+
+def _split(mesh: Mesh, sel: IntArray, s: _Sides, m: _Mids) -> tuple[IntArray, IntArray, IntArray]:
+    """Offsets and vertices of the new cells, and the old cell of each: the new points
+    inserted into every cell along its edges, each refined cell split at its midpoints."""
+    cv, de = mesh.cell_vertices, mesh.directed_edges
+    n_new = m.code.size
+    nk = max(mesh.n_points, 1)
+    # the new points of every mesh edge, from its lower vertex id to its higher
+    along = np.lexsort((m.t, m.code))
+    key = m.code[along]
+    head = np.ones(key.size, dtype=bool)
+    head[1:] = key[1:] != key[:-1]
+    gfirst = np.flatnonzero(head)
+    gkey, gcount = key[gfirst], np.diff(np.append(gfirst, key.size))
+    ecode = np.minimum(de[:, 0], de[:, 1]) * nk + np.maximum(de[:, 0], de[:, 1])
+    g = np.minimum(np.searchsorted(gkey, ecode), max(gkey.size - 1, 0))
+    cnt = np.where(gkey[g] == ecode, gcount[g], 0) if gkey.size else np.zeros_like(ecode)
+    wpos = np.arange(cv.size) + np.cumsum(cnt) - cnt  # the old vertices in the new lists
+    W = np.empty(cv.size + int(cnt.sum()), dtype=np.int64)
+    W[wpos] = cv
+    er = np.repeat(np.arange(cnt.size), cnt)
+    i = np.arange(er.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    fwd = de[:, 0] < de[:, 1]
+    W[wpos[er] + 1 + i] = (
+        mesh.n_points + along[gfirst[g[er]] + np.where(fwd[er], i, cnt[er] - 1 - i)]
+    )
+    woff = np.append(wpos[mesh.cell_offsets[:-1]], W.size)
+    nW = np.diff(woff)
+    # the place of every side's midpoint in its cell's new list
+    r = s.row[m.at]
+    rank = np.empty(n_new, dtype=np.int64)
+    rank[along] = np.arange(n_new) - np.repeat(gfirst, gcount)
+    k = rank[np.maximum(m.new, 0)] if n_new else np.zeros_like(r)
+    k = np.where(fwd[r], k, cnt[r] - 1 - k)
+    wm = np.where(m.hit, wpos[r], wpos[r] + 1 + k)
+    # child j of a refined cell runs from midpoint j - 1 to midpoint j, then the centre
+    K = np.diff(s.first)
+    owner = np.repeat(sel, K)
+    prev = np.arange(owner.size) - 1
+    prev[s.first[:-1]] = s.first[1:] - 1
+    lo = wm[prev] - woff[owner]
+    span = (wm - woff[owner] - lo) % nW[owner] + 1
+    nout = np.ones(mesh.n_cells, dtype=np.int64)
+    nout[sel] = K
+    parent = np.repeat(np.arange(mesh.n_cells, dtype=np.int64), nout)
+    refined = np.zeros(mesh.n_cells, dtype=bool)
+    refined[sel] = True
+    child = np.flatnonzero(refined[parent])
+    first, count = np.zeros(parent.size, dtype=np.int64), nW[parent]
+    first[child], count[child] = lo, span
+    centre = np.full(parent.size, -1, dtype=np.int64)
+    centre[child] = mesh.n_points + n_new + np.repeat(np.arange(sel.size), K)
+    size = count + (centre >= 0)
+    offsets = np.concatenate([[0], np.cumsum(size)])
+    o = np.repeat(np.arange(parent.size), size)
+    j = np.arange(o.size) - offsets[o]
+    c = parent[o]
+    verts = np.where(j < count[o], W[woff[c] + (first[o] + j) % nW[c]], centre[o])
+    return offsets, verts, parent
+
+
+def _carry_tags(old: Mesh, new: Mesh, code: IntArray, pid: IntArray) -> Mesh:
+    """Boundary tags of ``new`` from ``old``: a half of a split edge keeps its parent's
+    code (``pid``: the new points on old edges, ``code``: key min * nk + max of each)."""
     old_tags = old.boundary_tags
     if old_tags is None or not np.any(old_tags):
         return new
@@ -243,10 +342,8 @@ def _carry_tags(
     okey, otag = okey[order], old_tags[order]
     parent_edge = np.arange(new.n_points, dtype=np.int64)  # new vertex -> an old edge key
     is_new = np.zeros(new.n_points, dtype=bool)
-    for (a, b), lst in on_edge.items():
-        for _t, pid in lst:
-            parent_edge[pid] = a * nk + b
-            is_new[pid] = True
+    parent_edge[pid] = code
+    is_new[pid] = True
     be = new.boundary_edges
     p, q = be[:, 0], be[:, 1]
     key = np.minimum(p, q) * nk + np.maximum(p, q)
@@ -255,7 +352,7 @@ def _carry_tags(
     i = np.clip(np.searchsorted(okey, key), 0, len(okey) - 1)
     found = okey[i] == key
     tags = np.where(found, otag[i], 0).astype(np.int8)
-    return Mesh(new.points, new.cell_offsets, new.cell_vertices, tags, old.part_names)
+    return new._retagged(tags, old.part_names)
 
 
 def refine_along(
