@@ -149,11 +149,7 @@ def test_slid_hanging_nodes_match_the_loop(name, seed):
         )
         two_on_one_edge += mids.code.size - np.unique(mids.code).size
         mesh = _assert_same(mesh, cells)
-        # not check_cells: its test of crossing sides can take two pieces of one straight
-        # side (a few ulps from parallel, after several levels) for crossing ones
-        check_vertices(mesh)
-        check_conforming(mesh)
-        assert np.all(mesh.cell_areas > 0)
+        _check_geometry(mesh)
     assert two_on_one_edge > 0
 
 

@@ -66,7 +66,10 @@ def crossing_sides(
     """Which non-adjacent sides ``i < j`` of the polygons ``X`` (m, n, 2) meet.
 
     Returns the (m, n_pairs) mask and the side pairs ``i``, ``j``; segment
-    parameters within ``[-eps, 1 + eps]`` count as meeting, parallel sides never.
+    parameters within ``[-eps, 1 + eps]`` count as meeting, parallel sides never. Sides
+    whose angle has a sine below 1e-10 count as parallel: two pieces of one straight
+    side (hanging nodes on a sloped side) are parallel only to round-off, and the
+    parameters of such a pair are quotients of round-off.
     """
     n = X.shape[1]
     i, j = np.triu_indices(n, k=2)
@@ -80,7 +83,10 @@ def crossing_sides(
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / rxs
         u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / rxs
-    hit = (rxs != 0) & (t >= -eps) & (t <= 1 + eps) & (u >= -eps) & (u <= 1 + eps)
+    parallel = np.abs(rxs) <= 1e-10 * np.hypot(r[..., 0], r[..., 1]) * np.hypot(
+        s[..., 0], s[..., 1]
+    )
+    hit = ~parallel & (t >= -eps) & (t <= 1 + eps) & (u >= -eps) & (u <= 1 + eps)
     return hit, i, j
 
 
