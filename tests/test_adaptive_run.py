@@ -8,6 +8,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import json
+import re
 import signal
 import subprocess
 import sys
@@ -331,3 +332,15 @@ def test_wear_beyond_the_layer_stops_at_its_first_level(tmp_path: Path) -> None:
         if np.any(s.result.wear[int(np.searchsorted(s.result.levels, lv))] > s.problem.nodal["g"])
     )
     assert said.startswith(f"{first} "), said
+
+
+def test_the_progress_bar_counts_the_levels_of_every_mesh(tmp_path: Path, capsys) -> None:
+    config = _config(tmp_path)
+    run_config(config, tmp_path / "out", progress=True)
+    err = capsys.readouterr().err
+    # one update per mesh change, with the cells of the mesh that computed the levels
+    counts = [int(m) for m in re.findall(r"time levels:\s+\d+%\|[^|]*\|\s+(\d+)/9", err)]
+    assert counts[-1] == 9 and counts == sorted(counts) and len(set(counts)) >= 3
+    assert re.search(r"\d+ cells", err)
+    run_config(config, tmp_path / "quiet", progress=False)
+    assert "time levels" not in capsys.readouterr().err

@@ -82,6 +82,8 @@ def execute_adaptive(plan: RunPlan, *, progress: bool = True) -> list[Segment]:
         )
         done: list[AdaptiveState] = [start] if start is not None else []
 
+        bar = _bar(progress, len(cfg.problem.time.t), start.first if start is not None else 0)
+
         def on_segment(seg: Segment, nxt: AdaptiveState | None) -> None:
             _check_wear(seg, nxt is None)
             with saving():
@@ -90,6 +92,9 @@ def execute_adaptive(plan: RunPlan, *, progress: bool = True) -> list[Segment]:
                     meta["written"] = datetime.now(UTC).isoformat(timespec="seconds")
                     write_adaptive_checkpoint(out, nxt, meta)
                     done.append(nxt)
+            if bar is not None:  # the levels the segment owns, and the mesh it ran on
+                bar.set_postfix_str(f"{seg.problem.mesh.n_cells} cells", refresh=False)
+                bar.update(seg.last - seg.first + (nxt is None))
             check_stop()  # a safe point of every mesh change
 
         try:
@@ -105,12 +110,27 @@ def execute_adaptive(plan: RunPlan, *, progress: bool = True) -> list[Segment]:
         except BaseException as exc:
             _stop(plan, h5, done[-1] if done else None, exc)
             raise
+        finally:
+            if bar is not None:
+                bar.close()
         try:
             segments = _finish(plan)
         except BaseException as exc:
             outputs_failed(plan, exc)
             raise
     return segments
+
+
+def _bar(progress: bool, total: int, initial: int) -> Any:
+    """A progress bar over the time levels, updated at every mesh change (or None)."""
+    if not progress:
+        return None
+    from tqdm.auto import tqdm  # here: tqdm.auto imports asyncio (30 ms)
+
+    # drawn at every update: there is one a mesh change
+    return tqdm(
+        total=total, initial=initial, desc="time levels", unit="lvl", leave=False, mininterval=0
+    )
 
 
 def _groups(h5: Any) -> list[str]:
