@@ -355,8 +355,18 @@ def test_a_stopped_study_started_again_skips_finished_runs(
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
-    runs = sorted((out / "runs").glob("r*"))
-    while any(locked_by(d) is not None for d in runs):  # tasks already started finish
+    # the runs a worker had already received finish, and may start (lock their
+    # directory) a moment after the client stopped: wait until nothing changes for 1.5 s
+    state: tuple = ()
+    quiet, deadline = time.monotonic(), time.monotonic() + 60
+    while time.monotonic() < deadline:
+        runs = sorted((out / "runs").glob("r*"))
+        locked = [locked_by(d) is not None for d in runs]
+        now = ([d.name for d in runs], [is_complete(d) for d in runs], locked)
+        if now != state:
+            state, quiet = now, time.monotonic()
+        elif not any(locked) and time.monotonic() - quiet > 1.5:
+            break
         time.sleep(0.05)
     done = {d.name: (d / "result.npz").stat().st_mtime_ns for d in runs if is_complete(d)}
     assert 2 <= len(done) < 10, len(done)
