@@ -26,6 +26,7 @@ from vemwear.mesh.adapt import CellTree, refine_tree
 from vemwear.mesh.coarsen import coarsen_tree
 from vemwear.mesh.curves import OFF_CHORD
 from vemwear.simulate import Result, simulate, simulate_adaptive
+from vemwear.simulate.adapt import adapt
 from vemwear.simulate.problem import Problem
 
 
@@ -163,3 +164,14 @@ def test_adaptive_punch_goes_on_bitwise_from_a_state(tmp_path: Path) -> None:
     on_arc = full[-1].problem.contact.points
     assert len(on_arc) > len(p.contact.points)  # the arc was refined, onto the circle
     assert _off_circle(on_arc).max() < 1e-6
+
+
+def test_the_adaptive_loop_refines_onto_the_arc_too(tmp_path: Path) -> None:
+    p = _punch(tmp_path, 12, 4)
+    steps = adapt(p, theta=0.5, max_passes=3)
+    assert len(steps) == 3
+    on_arc = steps[-1].problem.contact.points
+    assert len(on_arc) > len(p.contact.points)
+    assert _off_circle(on_arc).max() < 1e-6
+    chords = adapt(p, theta=0.5, max_passes=3, curved=False)
+    assert _off_circle(chords[-1].problem.contact.points).max() > 1e-4

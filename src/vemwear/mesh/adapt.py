@@ -169,9 +169,14 @@ def refine_tree(
 
 
 def refine_graded(
-    mesh: Mesh, level: ArrayLike, marked: ArrayLike, max_difference: int = 1
+    mesh: Mesh,
+    level: ArrayLike,
+    marked: ArrayLike,
+    max_difference: int = 1,
+    curve: BoundaryCurve | None = None,
 ) -> tuple[Mesh, IntArray, IntArray]:
-    """Refine the marked cells and their :func:`graded_closure` by one level.
+    """Refine the marked cells and their :func:`graded_closure` by one level (new
+    boundary vertices on ``curve``, see :func:`~vemwear.mesh.refine.refine_cells`).
 
     Returns
     -------
@@ -186,5 +191,5 @@ def refine_graded(
     tree = CellTree(
         lev, np.full(len(lev), -1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
     )
-    new, tree2, parent = refine_tree(mesh, tree, marked, max_difference)
+    new, tree2, parent = refine_tree(mesh, tree, marked, max_difference, curve)
     return new, tree2.level, parent
