@@ -175,3 +175,14 @@ def test_the_adaptive_loop_refines_onto_the_arc_too(tmp_path: Path) -> None:
     assert _off_circle(on_arc).max() < 1e-6
     chords = adapt(p, theta=0.5, max_passes=3, curved=False)
     assert _off_circle(chords[-1].problem.contact.points).max() > 1e-4
+
+
+def test_the_curve_converges_to_the_circle_at_fourth_order() -> None:
+    off = []
+    for nx in (12, 24, 48):
+        mesh = punch_mesh(nx, nx // 3)
+        fine = refine_cells(mesh, np.unique(mesh.boundary_edge_cells), curve=BoundaryCurve.of(mesh))
+        arc = fine.part_vertices("arc")
+        off.append(_off_circle(fine.points[arc[arc >= mesh.n_points]]).max())
+    # circle tangents at the vertices and a cubic over the chord: O(h^4), 16 per halving
+    assert off[0] / off[1] > 12 and off[1] / off[2] > 12, off

@@ -136,16 +136,23 @@ class BoundaryCurve:
 
     def locate(self, X: FloatArray, tags: IntArray) -> tuple[IntArray, FloatArray, FloatArray]:
         """For points ``X`` (m, 2) on boundary parts ``tags``: the nearest initial edge of
-        the same part, the distance to its chord and the parameter of the projection."""
+        the same part (-1 if none is near), the distance to its chord and the parameter
+        of the projection."""
         X = np.asarray(X, dtype=float).reshape(-1, 2)
         if len(X) == 0 or len(self.A) == 0:
             z = np.zeros(len(X))
             return np.full(len(X), -1, np.int64), z + np.inf, z
-        dist, s = point_segment_distance(X[:, None, :], self.A[None], self.B[None])
-        dist = np.where(self.tag[None, :] == np.asarray(tags)[:, None], dist, np.inf)
-        e = np.argmin(dist, axis=1)
+        from scipy.spatial import cKDTree  # imported when used: straight meshes never are
+
+        k = min(8, len(self.A))  # the edges nearest by their midpoints, then exactly
+        _, cand = cKDTree(0.5 * (self.A + self.B)).query(X, k=k)
+        cand = np.asarray(cand, dtype=np.int64).reshape(len(X), k)
+        dist, s = point_segment_distance(X[:, None, :], self.A[cand], self.B[cand])
+        dist = np.where(self.tag[cand] == np.asarray(tags)[:, None], dist, np.inf)
+        best = np.argmin(dist, axis=1)
         rows = np.arange(len(X))
-        return e.astype(np.int64), dist[rows, e], s[rows, e]
+        e = np.where(np.isfinite(dist[rows, best]), cand[rows, best], -1)
+        return e, dist[rows, best], s[rows, best]
 
     def snap(self, X: FloatArray, tags: IntArray) -> FloatArray:
         """Points ``X`` (m, 2) on boundary parts ``tags`` moved onto the curve: those near
