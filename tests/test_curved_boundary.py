@@ -5,9 +5,15 @@ nodes, and the adaptive punch gets the geometry's accuracy."""
 
 from __future__ import annotations
 
+import json
+import signal
+import subprocess
+import sys
+import time
 from importlib.resources import files
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 
@@ -186,3 +192,44 @@ def test_the_curve_converges_to_the_circle_at_fourth_order() -> None:
         off.append(_off_circle(fine.points[arc[arc >= mesh.n_points]]).max())
     # circle tangents at the vertices and a cubic over the chord: O(h^4), 16 per halving
     assert off[0] / off[1] > 12 and off[1] / off[2] > 12, off
+
+
+def test_a_killed_punch_run_resumes_bitwise_on_the_arc(tmp_path: Path) -> None:
+    from vemwear import run_config
+    from vemwear.examples import config_path
+
+    src = config_path("punch")
+    (tmp_path / "punch.msh").write_bytes((src.parent / "punch.msh").read_bytes())
+    config = tmp_path / "punch.toml"
+    text = src.read_text() + "\n[adapt]\nevery = 4\nmax_cells = 600\ncoarsen = true\n"
+    config.write_text(text.replace("[output]", "[output]\nfigures = false\nvtk = false", 1))
+    run_config(config, tmp_path / "ref", progress=False)
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "vemwear", "run", str(config), "-o", str(out), "--no-progress"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    t0 = time.monotonic()
+    while _segments_done(out) < 3:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() - t0 < 60, "no checkpoint"
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    resumed = subprocess.run([*cmd, "--resume"], capture_output=True, text=True)
+    assert resumed.returncode == 0, resumed.stderr
+    with h5py.File(tmp_path / "ref" / "result.h5") as f, h5py.File(out / "result.h5") as g:
+        names = sorted(n for n in f if n.startswith("mesh_"))
+        assert names == sorted(n for n in g if n.startswith("mesh_")) and len(names) > 3
+        for n in names:
+            for k in f[n]:
+                assert np.array_equal(f[n][k][()], g[n][k][()]), (n, k)
+        last = f[names[-1]]
+        assert len(last["contact_points"]) > 25  # the arc was refined, onto the circle
+        assert _off_circle(last["contact_points"][()]).max() < 1e-6
+
+
+def _segments_done(out: Path) -> int:
+    try:
+        with np.load(out / "checkpoint.npz") as z:
+            return int(json.loads(str(z["meta"]))["segment"])
+    except (OSError, ValueError, KeyError):
+        return 0
