@@ -14,6 +14,9 @@ the neighbouring cell that shares the edge, so the result is conforming in the
 virtual element sense (paper, Remark 4.9) and passes
 :func:`~vemwear.mesh.checks.check_mesh`. A boundary edge that is split keeps the
 part code of its parent edge in both halves.
+Given the curve of the initial mesh's boundary (:mod:`vemwear.mesh.curves`), a new
+midpoint on a curved boundary edge goes onto that curve instead, so that refinement
+refines the geometry too; on straight edges it stays the middle of the corners.
 
 The centre is the centroid when it lies strictly inside the kernel of the cell
 (always true for convex cells), otherwise the centre of the largest disk in the
