@@ -96,13 +96,16 @@ class BoundaryCurve:
         start = np.full(mesh.n_points, -1, dtype=np.int64)
         start[be[:, 0]] = np.arange(len(be))
         nxt = start[be[:, 1]]  # the boundary edge after every edge (the boundary is closed)
-        prv = np.empty_like(nxt)
-        prv[nxt] = np.arange(len(be))
+        ok = nxt >= 0  # else a vertex where the boundary touches itself: a chain's end
+        own = np.arange(len(be))
+        nxt = np.where(ok, nxt, own)
+        prv = own.copy()
+        prv[nxt[ok]] = own[ok]
         cr, dt = _cross(u, u[nxt]), _dot(u, u[nxt])
         # joint[e]: the vertex between e and nxt[e] is inside a chain
-        joint = (tag == tag[nxt]) & (np.arctan2(np.abs(cr), dt) <= KINK)
+        joint = ok & (tag == tag[nxt]) & (np.arctan2(np.abs(cr), dt) <= KINK)
         flat = joint & (np.abs(cr) <= 1e-10) & (dt > 0)  # e and nxt[e] collinear
-        has_prev, has_next = joint[prv], joint
+        has_prev, has_next = joint[prv] & (prv != own), joint
         straight = flat | flat[prv] | ~(has_prev | has_next)
         # the tangent at the end B of every edge (= the start of nxt where joint)
         a2, b2 = L * L, L[nxt] * L[nxt]
