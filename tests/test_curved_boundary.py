@@ -195,7 +195,6 @@ def test_the_curve_converges_to_the_circle_at_fourth_order() -> None:
 
 
 def test_a_killed_punch_run_resumes_bitwise_on_the_arc(tmp_path: Path) -> None:
-    from vemwear import run_config
     from vemwear.examples import config_path
 
     src = config_path("punch")
@@ -203,9 +202,12 @@ def test_a_killed_punch_run_resumes_bitwise_on_the_arc(tmp_path: Path) -> None:
     config = tmp_path / "punch.toml"
     text = src.read_text() + "\n[adapt]\nevery = 4\nmax_cells = 600\ncoarsen = true\n"
     config.write_text(text.replace("[output]", "[output]\nfigures = false\nvtk = false", 1))
-    run_config(config, tmp_path / "ref", progress=False)
+    # the reference in a process of its own too: the arrays of two fresh processes
+    run = [sys.executable, "-m", "vemwear", "run", str(config), "--no-progress", "-o"]
+    done = subprocess.run([*run, str(tmp_path / "ref")], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
     out = tmp_path / "out"
-    cmd = [sys.executable, "-m", "vemwear", "run", str(config), "-o", str(out), "--no-progress"]
+    cmd = [*run, str(out)]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     t0 = time.monotonic()
     while _segments_done(out) < 3:
