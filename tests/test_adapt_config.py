@@ -28,6 +28,9 @@ def test_the_settings_reach_the_adaptive_run() -> None:
     assert (a.coarsen, a.max_level, a.max_difference) == (0.2, 2, 1)
     off = parse_config(_config({"every": 2, "target_error": 1e-3})).adapt
     assert off is not None and off.coarsen == 0.0 and off.target_error == 1e-3
+    assert a.curved and off.curved  # new boundary vertices onto curved parts by default
+    flat = parse_config(_config({"every": 2, "max_cells": 200, "curved": False})).adapt
+    assert flat is not None and not flat.curved
     assert parse_config(_config(None)).adapt is None
 
 

@@ -63,6 +63,12 @@ class Adapt(Section):
     max_difference: int = Field(
         1, ge=1, description="largest refinement level difference of neighbouring cells"
     )
+    curved: bool = Field(
+        True,
+        description="new vertices on curved boundary parts go onto the curve through the "
+        "initial mesh's boundary vertices (false: onto the chords); straight parts are "
+        "not affected",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -119,6 +125,7 @@ def adapt_settings(
             target_error=a.target_error,
             max_level=a.max_level,
             max_difference=a.max_difference,
+            curved=a.curved,
         )
 
 

@@ -9,7 +9,10 @@ not a contact node (a clamped end of Gamma_C) carries 0, the convention of the n
 quadrature (its weight there is 0): refinement then keeps the integral of the values by
 the nodal quadrature, and the worn volume with it.
 Refining and coarsening keep Gamma_C as a set, so every new node lies on an old contact
-edge; a point that does not is refused, naming it.
+edge; a point that does not is refused, naming it. On a curved Gamma_C, refinement puts
+the new nodes onto the curve (:mod:`vemwear.mesh.curves`), off the old edge by about its
+sagitta: ``off_chord`` then accepts a node within that fraction of the old edge's length
+from it, and gives it the value at its projection onto the edge.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ def transfer_along_contact(
     values: ArrayLike,
     points: ArrayLike,
     parts: Sequence[str] = ("contact",),
+    off_chord: float = 0.0,
 ) -> NDArray[np.float64]:
     """The piecewise linear function of ``values`` along the contact edges of ``mesh``,
     at ``points`` (module docstring).
@@ -47,6 +51,10 @@ def transfer_along_contact(
         The new contact nodes.
     parts : sequence of str
         The contact parts whose edges carry the function.
+    off_chord : float
+        Accept a node up to this fraction of an old edge's length away from the edge
+        (0: only nodes on the edges, within round-off; see
+        :data:`~vemwear.mesh.curves.OFF_CHORD`).
 
     Returns
     -------
@@ -78,8 +86,11 @@ def transfer_along_contact(
     best = np.argmin(dist, axis=1)
     rows = np.arange(len(X))
     e = cand[rows, best]
-    if np.any(dist[rows, best] > tol):
-        q = int(np.flatnonzero(dist[rows, best] > tol)[0])
+    far = dist[rows, best] > tol
+    if off_chord > 0:
+        far &= dist[rows, best] > tol + off_chord * np.linalg.norm(B[e] - A[e], axis=1)
+    if np.any(far):
+        q = int(np.flatnonzero(far)[0])
         raise MeshError(
             f"new contact node {q} at {X[q].tolist()} lies on no contact edge of the old mesh"
         )

@@ -3,6 +3,7 @@ location."""
 
 from .boundary import segment_predicate, select_parts, side_predicate, tag_rectangle
 from .checks import check_mesh
+from .curves import BoundaryCurve
 from .families import (
     distorted_quads,
     hexagons,
@@ -28,6 +29,7 @@ from .voronoi import (
 
 __all__ = [
     "PARTS",
+    "BoundaryCurve",
     "Mesh",
     "MeshError",
     "NonNestedMeshError",

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .curves import BoundaryCurve
 from .polymesh import Mesh
 from .refine import refine_cells
 
@@ -144,12 +145,17 @@ class CellTree:
 
 
 def refine_tree(
-    mesh: Mesh, tree: CellTree, marked: ArrayLike, max_difference: int = 1
+    mesh: Mesh,
+    tree: CellTree,
+    marked: ArrayLike,
+    max_difference: int = 1,
+    curve: BoundaryCurve | None = None,
 ) -> tuple[Mesh, CellTree, IntArray]:
     """Refine the marked cells and their graded closure; the new mesh, its tree, and for
-    every new cell the old cell it comes from."""
+    every new cell the old cell it comes from (new boundary vertices on ``curve``, see
+    :func:`~vemwear.mesh.refine.refine_cells`)."""
     cells = graded_closure(mesh, tree.level, marked, max_difference)
-    new, parent = refine_cells(mesh, cells, return_parent=True)
+    new, parent = refine_cells(mesh, cells, return_parent=True, curve=curve)
     split = np.zeros(mesh.n_cells, dtype=bool)
     split[cells] = True
     rank = np.cumsum(split) - 1  # the k-th refined cell starts family n_families + k
@@ -163,9 +169,14 @@ def refine_tree(
 
 
 def refine_graded(
-    mesh: Mesh, level: ArrayLike, marked: ArrayLike, max_difference: int = 1
+    mesh: Mesh,
+    level: ArrayLike,
+    marked: ArrayLike,
+    max_difference: int = 1,
+    curve: BoundaryCurve | None = None,
 ) -> tuple[Mesh, IntArray, IntArray]:
-    """Refine the marked cells and their :func:`graded_closure` by one level.
+    """Refine the marked cells and their :func:`graded_closure` by one level (new
+    boundary vertices on ``curve``, see :func:`~vemwear.mesh.refine.refine_cells`).
 
     Returns
     -------
@@ -180,5 +191,5 @@ def refine_graded(
     tree = CellTree(
         lev, np.full(len(lev), -1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
     )
-    new, tree2, parent = refine_tree(mesh, tree, marked, max_difference)
+    new, tree2, parent = refine_tree(mesh, tree, marked, max_difference, curve)
     return new, tree2.level, parent

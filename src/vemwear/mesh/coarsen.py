@@ -13,7 +13,11 @@ centre of the parent disappears with the children's interior edges; a side midpo
 no cell needs any more (a vertex that lies on a straight side of every cell that holds
 it, between two boundary pieces of the same part if on the boundary) is removed, so that
 refining and coarsening a region gives back the mesh it started from (with its vertices
-renumbered).
+renumbered). On a curved boundary (:mod:`vemwear.mesh.curves`) the new boundary vertex of
+a refined cell lies on the curve, not on the cell's side; given the curve, a boundary
+vertex that only the merged cell holds and that is the curve's point of its two boundary
+neighbours' middle (the point refinement made there) is removed too, and the merged cell
+gets back its chord.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .adapt import CellTree, neighbour_pairs
+from .curves import BoundaryCurve
 from .polymesh import Mesh, MeshError
 from .refine import corners
 
@@ -54,7 +59,11 @@ def coarsening_marking(indicators: ArrayLike, fraction: float) -> IntArray:
 
 
 def coarsen_tree(
-    mesh: Mesh, tree: CellTree, marked: ArrayLike, max_difference: int = 1
+    mesh: Mesh,
+    tree: CellTree,
+    marked: ArrayLike,
+    max_difference: int = 1,
+    curve: BoundaryCurve | None = None,
 ) -> tuple[Mesh, CellTree, IntArray]:
     """Merge the families whose cells are all marked (module docstring).
 
@@ -67,6 +76,8 @@ def coarsen_tree(
         Cells marked for coarsening.
     max_difference : int
         Largest level difference of neighbours after the merge.
+    curve : BoundaryCurve, optional
+        The curve the refinement put the boundary vertices on.
 
     Returns
     -------
@@ -97,10 +108,12 @@ def coarsen_tree(
     merge = ok[np.where(fam >= 0, fam, 0)] & (fam >= 0)
     if not np.any(merge):
         return mesh, tree, np.arange(nc, dtype=np.int64)
-    return _merge(mesh, tree, merge)
+    return _merge(mesh, tree, merge, curve)
 
 
-def _merge(mesh: Mesh, tree: CellTree, merge: NDArray[np.bool_]) -> tuple[Mesh, CellTree, IntArray]:
+def _merge(
+    mesh: Mesh, tree: CellTree, merge: NDArray[np.bool_], curve: BoundaryCurve | None
+) -> tuple[Mesh, CellTree, IntArray]:
     fam = tree.family
     cells = mesh.cells
     new_cells: list[list[int]] = []
@@ -125,7 +138,7 @@ def _merge(mesh: Mesh, tree: CellTree, merge: NDArray[np.bool_]) -> tuple[Mesh, 
         new_cells.append(_union([cells[k] for k in members[f]], f))
         level.append(int(tree.level[c]) - 1)
         family.append(int(tree.parent_family[f]))
-    mesh2 = _drop_unneeded(mesh, new_cells)
+    mesh2 = _drop_unneeded(mesh, new_cells, curve)
     tree2 = CellTree(np.array(level), np.array(family), tree.parent_family, tree.born)
     return mesh2, tree2, owner
 
@@ -151,10 +164,11 @@ def _union(children: list[NDArray[np.int64]], f: int) -> list[int]:
     return out
 
 
-def _drop_unneeded(mesh: Mesh, cells: list[list[int]]) -> Mesh:
+def _drop_unneeded(mesh: Mesh, cells: list[list[int]], curve: BoundaryCurve | None) -> Mesh:
     """The mesh of ``cells`` (vertex ids of ``mesh``) without the vertices no cell uses and
     without the vertices that lie on a straight side of every cell holding them (and
-    between boundary pieces of one part), with the boundary tags carried over."""
+    between boundary pieces of one part) or, given the curve, that refinement put onto it
+    (module docstring), with the boundary tags carried over."""
     tmp = Mesh.from_cells(mesh.points, cells)
     # a vertex is needed where some cell turns at it
     need = np.zeros(mesh.n_points, dtype=bool)
@@ -175,6 +189,8 @@ def _drop_unneeded(mesh: Mesh, cells: list[list[int]]) -> Mesh:
     on_b = np.zeros(mesh.n_points, dtype=bool)
     on_b[be[:, 0]] = True
     need |= on_b & (first != last)
+    if curve is not None and curve.any:
+        need &= ~_snapped_midpoints(mesh.points, tmp, be, first == last, first, curve)
     drop = used & ~need
     if np.any(drop):
         cells = [[v for v in c if not drop[v]] for c in cells]
@@ -185,6 +201,35 @@ def _drop_unneeded(mesh: Mesh, cells: list[list[int]]) -> Mesh:
     # the tags: every boundary edge of the result lies on one old boundary edge chain
     old_tags = tag_at(np.flatnonzero(keep)[out.boundary_edges])
     return Mesh(out.points, out.cell_offsets, out.cell_vertices, old_tags, mesh.part_names)
+
+
+def _snapped_midpoints(
+    P: NDArray[np.float64],
+    tmp: Mesh,
+    be: NDArray[np.int64],
+    inside_part: NDArray[np.bool_],
+    tag: NDArray[np.int64],
+    curve: BoundaryCurve,
+) -> NDArray[np.bool_]:
+    """The boundary vertices of ``tmp`` (vertex ids of points ``P``) that one cell holds,
+    inside one part, and that are the curve's point at the middle of their two boundary
+    neighbours."""
+    n = len(P)
+    holders = np.bincount(tmp.cell_vertices, minlength=n)
+    before = np.full(n, -1, dtype=np.int64)
+    before[be[:, 1]] = be[:, 0]
+    after = np.full(n, -1, dtype=np.int64)
+    after[be[:, 0]] = be[:, 1]
+    v = np.flatnonzero((before >= 0) & (after >= 0) & (holders == 1) & inside_part)
+    out = np.zeros(n, dtype=bool)
+    if v.size == 0:
+        return out
+    a, b = P[before[v]], P[after[v]]
+    snapped = curve.snap(0.5 * (a + b), tag[v])
+    gap = np.linalg.norm(snapped - P[v], axis=1)
+    moved = np.linalg.norm(snapped - 0.5 * (a + b), axis=1) > 0
+    out[v] = moved & (gap <= 1e-9 * np.linalg.norm(b - a, axis=1))
+    return out
 
 
 def _boundary_tag_of(mesh: Mesh) -> Callable[[NDArray[np.int64]], NDArray[np.int8]]:

@@ -14,6 +14,9 @@ the neighbouring cell that shares the edge, so the result is conforming in the
 virtual element sense (paper, Remark 4.9) and passes
 :func:`~vemwear.mesh.checks.check_mesh`. A boundary edge that is split keeps the
 part code of its parent edge in both halves.
+Given the curve of the initial mesh's boundary (:mod:`vemwear.mesh.curves`), a new
+midpoint on a curved boundary edge goes onto that curve instead, so that refinement
+refines the geometry too; on straight edges it stays the middle of the corners.
 
 The centre is the centroid when it lies strictly inside the kernel of the cell
 (always true for convex cells), otherwise the centre of the largest disk in the
@@ -35,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..util.arrays import isin as _isin
 from ..util.arrays import unique as _unique
+from .curves import BoundaryCurve
 from .polymesh import Mesh, MeshError
 from .quality import _kernel_disk_group
 
@@ -95,18 +99,30 @@ def _ranges(starts: IntArray, counts: IntArray) -> IntArray:
 
 @overload
 def refine_cells(
-    mesh: Mesh, cell_ids: ArrayLike, *, return_parent: Literal[False] = ...
+    mesh: Mesh,
+    cell_ids: ArrayLike,
+    *,
+    return_parent: Literal[False] = ...,
+    curve: BoundaryCurve | None = ...,
 ) -> Mesh: ...
 
 
 @overload
 def refine_cells(
-    mesh: Mesh, cell_ids: ArrayLike, *, return_parent: Literal[True]
+    mesh: Mesh,
+    cell_ids: ArrayLike,
+    *,
+    return_parent: Literal[True],
+    curve: BoundaryCurve | None = ...,
 ) -> tuple[Mesh, IntArray]: ...
 
 
 def refine_cells(
-    mesh: Mesh, cell_ids: ArrayLike, *, return_parent: bool = False
+    mesh: Mesh,
+    cell_ids: ArrayLike,
+    *,
+    return_parent: bool = False,
+    curve: BoundaryCurve | None = None,
 ) -> Mesh | tuple[Mesh, IntArray]:
     """Split the given cells into quadrilaterals around their centres (one level).
 
@@ -119,6 +135,10 @@ def refine_cells(
         Cells to refine (repetitions are ignored).
     return_parent : bool
         Also return, for every new cell, the id of the cell of ``mesh`` it comes from.
+    curve : BoundaryCurve, optional
+        The curve of the initial mesh's boundary (:mod:`vemwear.mesh.curves`): the new
+        vertices on its curved edges go onto it; elsewhere, and without it, they are the
+        middles of the sides' corners.
 
     Returns
     -------
@@ -139,11 +159,29 @@ def refine_cells(
     for ids, X in batches:
         centres[ids] = _centres(X, mesh.cell_diameters[ids])
     mids = _midpoints(mesh, sides)
-    points = np.vstack([mesh.points, mids.xy, centres[sel]])
+    xy = mids.xy if curve is None or not curve.any else _snapped(mesh, mids, curve)
+    points = np.vstack([mesh.points, xy, centres[sel]])
     offsets, vertices, parent = _split(mesh, sel, sides, mids)
     pid = mesh.n_points + np.arange(mids.code.size)
     new_mesh = _carry_tags(mesh, Mesh(points, offsets, vertices), mids.code, pid)
     return (new_mesh, parent) if return_parent else new_mesh
+
+
+def _snapped(mesh: Mesh, m: _Mids, curve: BoundaryCurve) -> FloatArray:
+    """The new points ``m.xy`` with those on boundary edges moved onto ``curve``."""
+    nk = max(mesh.n_points, 1)
+    be = np.sort(mesh.boundary_edges, axis=1)
+    bkey = be[:, 0] * nk + be[:, 1]
+    order = np.argsort(bkey)
+    i = np.clip(np.searchsorted(bkey[order], m.code), 0, max(len(bkey) - 1, 0))
+    on = bkey[order][i] == m.code if len(bkey) else np.zeros(m.code.size, dtype=bool)
+    if not np.any(on):
+        return m.xy
+    tags = mesh.boundary_tags
+    tag = np.zeros(len(bkey), np.int64) if tags is None else np.asarray(tags, np.int64)
+    xy = m.xy.copy()
+    xy[on] = curve.snap(m.xy[on], tag[order][i[on]])
+    return xy
 
 
 @dataclass(frozen=True)

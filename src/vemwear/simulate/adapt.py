@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..mesh.adapt import dorfler_marking, refine_graded
+from ..mesh.curves import BoundaryCurve
 from ..mesh.polymesh import Mesh
 from .estimate import Estimate, estimate
 from .loop import Result, simulate
@@ -69,6 +70,7 @@ def adapt(
     max_passes: int = 30,
     max_difference: int = 1,
     max_level: int | None = None,
+    curved: bool = True,
     solver: SolverOptions | str = "newton",
 ) -> list[AdaptiveStep]:
     """Refine the mesh of ``problem`` adaptively.
@@ -89,6 +91,9 @@ def adapt(
         Largest refinement level difference of neighbouring cells.
     max_level : int, optional
         Cells of this level are not refined further (their marks are dropped).
+    curved : bool
+        New boundary vertices of curved boundary parts go onto the curve through the
+        initial mesh's boundary vertices (:class:`~vemwear.mesh.curves.BoundaryCurve`).
     solver : SolverOptions or str
         As for :func:`~vemwear.simulate.loop.simulate`.
 
@@ -108,6 +113,7 @@ def adapt(
     if max_passes < 1:
         raise ValueError(f"max_passes must be at least 1, got {max_passes}")
     level = np.zeros(problem.mesh.n_cells, dtype=np.int64)
+    curve = BoundaryCurve.of(problem.mesh) if curved else None
     steps: list[AdaptiveStep] = []
     pr = problem
     for k in range(max_passes):
@@ -123,7 +129,7 @@ def adapt(
             if marked.size:
                 mesh = pr.mesh
                 assert isinstance(mesh, Mesh)
-                new, new_level, _ = refine_graded(mesh, level, marked, max_difference)
+                new, new_level, _ = refine_graded(mesh, level, marked, max_difference, curve)
                 if max_cells is None or new.n_cells <= max_cells:
                     nxt = (new, new_level)
         steps.append(AdaptiveStep(pr, res, est, level, marked if nxt else marked[:0]))

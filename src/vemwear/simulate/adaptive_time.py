@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from ..contact.transfer import transfer_along_contact
 from ..mesh.adapt import CellTree, dorfler_marking, refine_tree
 from ..mesh.coarsen import coarsen_tree, coarsening_marking
+from ..mesh.curves import OFF_CHORD, BoundaryCurve
 from ..mesh.polymesh import Mesh
 from .estimate import Estimate, estimate
 from .levels import run_levels
@@ -94,6 +95,9 @@ class AdaptSettings:
         Cells of this level are not refined further.
     max_difference : int
         Largest level difference of neighbours (>= 1).
+    curved : bool
+        Put the new vertices of curved boundary edges onto the curve of the initial
+        mesh's boundary (:mod:`vemwear.mesh.curves`); straight edges are not affected.
 
     Raises
     ------
@@ -108,6 +112,7 @@ class AdaptSettings:
     target_error: float | None = None
     max_level: int | None = None
     max_difference: int = 1
+    curved: bool = True
 
     def __post_init__(self) -> None:
         theta, coarsen = self.theta, self.coarsen
@@ -172,6 +177,7 @@ def simulate_adaptive(
     target_error: float | None = None,
     max_level: int | None = None,
     max_difference: int = 1,
+    curved: bool = True,
     solver: SolverOptions | str = "newton",
     start: AdaptiveState | None = None,
     on_segment: Callable[[Segment, AdaptiveState | None], None] | None = None,
@@ -197,6 +203,9 @@ def simulate_adaptive(
         Cells of this level are not refined further.
     max_difference : int
         Largest level difference of neighbours.
+    curved : bool
+        New boundary vertices of curved boundary parts go onto the curve through the
+        initial mesh's boundary vertices (:class:`~vemwear.mesh.curves.BoundaryCurve`).
     solver : SolverOptions or str
         As for :func:`~vemwear.simulate.loop.simulate`.
     start : AdaptiveState, optional
@@ -215,12 +224,17 @@ def simulate_adaptive(
     """
     if not isinstance(problem.mesh, Mesh) or problem.order != 1:
         raise ValueError("adaptive runs are implemented for k = 1 in 2D")
-    cfg = AdaptSettings(every, theta, coarsen, max_cells, target_error, max_level, max_difference)
+    cfg = AdaptSettings(
+        every, theta, coarsen, max_cells, target_error, max_level, max_difference, curved
+    )
     opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
     t = problem.time.t
     N = len(t) - 1
     mesh: Mesh = problem.mesh
     tree = CellTree.initial(mesh.n_cells)
+    # the curve of the initial mesh, the same for a run started again from a state
+    curve = BoundaryCurve.of(mesh) if cfg.curved else None
+    off_chord = OFF_CHORD if curve is not None and curve.any else 0.0
     parts = tuple(pc.part for pc in problem.parts)
     w: NDArray[np.float64] | None = None
     segments: list[Segment] = []
@@ -244,18 +258,22 @@ def simulate_adaptive(
             if on_segment is not None:
                 on_segment(seg, None)
             return segments
-        new, tree = _change(mesh, tree, est, cfg)
+        new, tree = _change(mesh, tree, est, cfg, curve)
         w = res.wear[-1]
         if new is not mesh:
             nxt = dataclasses.replace(problem, mesh=new)
-            w = transfer_along_contact(mesh, pr.contact.nodes, w, nxt.contact.points, parts)
+            w = transfer_along_contact(
+                mesh, pr.contact.nodes, w, nxt.contact.points, parts, off_chord
+            )
         pr.discrete.release_solvers()  # the old mesh's factorization
         mesh, n0, k = new, n1, k + 1
         if on_segment is not None:
             on_segment(seg, AdaptiveState(k, n0, mesh, tree, w))
 
 
-def _change(mesh: Mesh, tree: CellTree, est: Estimate, cfg: AdaptSettings) -> tuple[Mesh, CellTree]:
+def _change(
+    mesh: Mesh, tree: CellTree, est: Estimate, cfg: AdaptSettings, curve: BoundaryCurve | None
+) -> tuple[Mesh, CellTree]:
     """Coarsen, then refine, once: the new mesh and its tree."""
     eta2 = est.indicators
     refine = dorfler_marking(eta2, cfg.theta)
@@ -266,9 +284,9 @@ def _change(mesh: Mesh, tree: CellTree, est: Estimate, cfg: AdaptSettings) -> tu
     owner = np.arange(mesh.n_cells)
     if cfg.coarsen > 0:
         spare = np.setdiff1d(coarsening_marking(eta2, cfg.coarsen), refine)
-        mesh, tree, owner = coarsen_tree(mesh, tree, spare, cfg.max_difference)
+        mesh, tree, owner = coarsen_tree(mesh, tree, spare, cfg.max_difference, curve)
     if refine.size:
-        new, tree2, _ = refine_tree(mesh, tree, owner[refine], cfg.max_difference)
+        new, tree2, _ = refine_tree(mesh, tree, owner[refine], cfg.max_difference, curve)
         if cfg.max_cells is None or new.n_cells <= cfg.max_cells:
             return new, tree2
     return mesh, tree

@@ -1,0 +1,142 @@
+"""The rounded punch (``examples/punch.toml``) on uniform and on adaptive meshes: the
+wear's accuracy against dofs and wall time, with the new boundary vertices on the arc
+(the default) and on the initial chords.
+
+The punch's mesh (:func:`vemwear.examples.punch_mesh.punch_mesh`, ``nx x ny``
+quadrilaterals over the arc ``y = R - sqrt(R^2 - x^2)``) is written with the shipped
+``punch.toml`` into a temporary directory and loaded from there; 32 steps. Every run's
+wear at T, interpolated along the arc onto the contact nodes of a uniform reference
+mesh (``--reference``, default 384 x 128), gives the relative L2 error along the arc;
+the table lists the dofs at T, the wall time of the run (set-up included, in this
+process) and that error, for uniform meshes 48 x 16 ... 192 x 64 and for adaptive runs
+(:func:`vemwear.simulate.simulate_adaptive`) of several settings. The runs are repeated
+``--repeat`` times, interleaved (every case once, then again), and the wall times are
+given as min / median / max; the last columns compare each run's dofs and median wall
+time with those of the uniform 192 x 64 mesh, measured in the same invocation.
+
+Usage::
+
+    python benchmarks/adaptive_punch.py --repeat 5
+    python benchmarks/adaptive_punch.py --reference 192 --quick
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import tempfile
+import time
+from collections.abc import Callable
+from importlib.resources import files
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from vemwear.config import load_config
+from vemwear.examples.punch_mesh import punch_mesh
+from vemwear.mesh import write_mesh
+from vemwear.simulate import Result, simulate, simulate_adaptive
+from vemwear.simulate.problem import Problem
+
+UNIFORM = (48, 96, 192)
+#: Adaptive settings: initial divisions, every, theta, max_cells, curved.
+ADAPTIVE = [
+    ((48, 16), 4, 0.5, 8000, True),
+    ((48, 16), 4, 0.5, 8000, False),
+    ((48, 16), 2, 0.5, 8000, True),
+    ((96, 32), 4, 0.5, 8000, True),
+    ((96, 32), 4, 0.5, 8000, False),
+]
+
+
+def punch_problem(nx: int, ny: int, where: Path) -> Problem:
+    """The problem of ``punch.toml`` on ``punch_mesh(nx, ny)``."""
+    d = where / f"punch_{nx}x{ny}"
+    d.mkdir(exist_ok=True)
+    write_mesh(punch_mesh(nx, ny), d / "punch.msh")
+    (d / "punch.toml").write_text((files("vemwear.examples") / "punch.toml").read_text())
+    return load_config(str(d / "punch.toml")).problem
+
+
+def wear_at_T(r: Result) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The wear at the last level along the arc, by increasing x."""
+    x = r.contact_points[:, 0]
+    order = x.argsort()
+    return x[order], np.asarray(r.wear[-1])[order]
+
+
+def _uniform(n: int, where: Path) -> Callable[[], tuple[int, Result]]:
+    def run() -> tuple[int, Result]:
+        p = punch_problem(n, n // 3, where)
+        return p.space.n_dofs, simulate(p, "newton")
+
+    return run
+
+
+def _adaptive(
+    div: tuple[int, int], every: int, theta: float, max_cells: int, curved: bool, where: Path
+) -> Callable[[], tuple[int, Result]]:
+    def run() -> tuple[int, Result]:
+        p = punch_problem(*div, where)
+        segs = simulate_adaptive(
+            p, every=every, theta=theta, max_cells=max_cells, curved=curved, keep=True
+        )
+        return segs[-1].problem.space.n_dofs, segs[-1].result
+
+    return run
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--reference", type=int, default=384, help="x divisions of the reference")
+    ap.add_argument("--repeat", type=int, default=3, help="interleaved repeats")
+    ap.add_argument("--quick", action="store_true", help="the first two adaptive settings")
+    a = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        where = Path(tmp)
+        n = a.reference
+        t0 = time.perf_counter()
+        xr, wr = wear_at_T(simulate(punch_problem(n, n // 3, where), "newton"))
+        print(f"reference {n} x {n // 3}: {time.perf_counter() - t0:.1f} s")
+
+        def error(r: Result) -> float:
+            x, w = wear_at_T(r)
+            d = np.interp(xr, x, w) - wr
+            return float(np.sqrt(np.trapezoid(d**2, xr) / np.trapezoid(wr**2, xr)))
+
+        cases: dict[str, Callable[[], tuple[int, Result]]] = {
+            f"uniform {m} x {m // 3}": _uniform(m, where) for m in UNIFORM
+        }
+        for div, every, theta, max_cells, curved in ADAPTIVE[: 2 if a.quick else None]:
+            name = (
+                f"adaptive from {div[0]} x {div[1]}, every {every}, theta {theta}, "
+                f"max_cells {max_cells}, {'on the arc' if curved else 'on the chords'}"
+            )
+            cases[name] = _adaptive(div, every, theta, max_cells, curved, where)
+        times: dict[str, list[float]] = {k: [] for k in cases}
+        found: dict[str, tuple[int, float]] = {}
+        for _ in range(a.repeat):
+            for name, run in cases.items():
+                t0 = time.perf_counter()
+                dofs, r = run()
+                times[name].append(time.perf_counter() - t0)
+                found[name] = (dofs, error(r))
+    base = f"uniform {UNIFORM[-1]} x {UNIFORM[-1] // 3}"
+    dofs0, med0 = found[base][0], statistics.median(times[base])
+    print(
+        "| mesh | dofs at T | wall time [s] min / median / max | wear error | "
+        f"dofs / {base} | time / {base} |"
+    )
+    print("|---|---|---|---|---|---|")
+    for name, ts in times.items():
+        dofs, err = found[name]
+        med = statistics.median(ts)
+        print(
+            f"| {name} | {dofs} | {min(ts):.2f} / {med:.2f} / {max(ts):.2f} | {err:.2e} | "
+            f"{dofs / dofs0:.2f} | {med / med0:.2f} |"
+        )
+
+
+if __name__ == "__main__":
+    main()
