@@ -21,12 +21,9 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import statistics
 import time
-from collections.abc import Callable
 
-import numpy as np
-from numpy.typing import NDArray
+from adaptive_table import Case, measure, table, wear_error
 
 from vemwear.paper import ex52
 from vemwear.simulate import Result, SolverOptions, simulate, simulate_adaptive
@@ -42,14 +39,7 @@ ADAPTIVE = [
 ]
 
 
-def wear_at_T(r: Result) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The wear at the last level along Gamma_C (the bottom side), by increasing x."""
-    x = r.contact_points[:, 0]
-    order = x.argsort()
-    return x[order], np.asarray(r.wear[-1])[order]
-
-
-def _uniform(n: int) -> Callable[[], tuple[int, Result]]:
+def _uniform(n: int) -> Case:
     def run() -> tuple[int, Result]:
         p = ex52.problem(0.2, 2.0, divisions=(n, n // 2), steps=STEPS)
         return p.space.n_dofs, simulate(p, SolverOptions("newton"))
@@ -59,7 +49,7 @@ def _uniform(n: int) -> Callable[[], tuple[int, Result]]:
 
 def _adaptive(
     div: tuple[int, int], every: int, theta: float, max_cells: int, level: int | None
-) -> Callable[[], tuple[int, Result]]:
+) -> Case:
     def run() -> tuple[int, Result]:
         p = ex52.problem(0.2, 2.0, divisions=div, steps=STEPS)
         segs = simulate_adaptive(p, every=every, theta=theta, max_cells=max_cells, max_level=level)
@@ -77,44 +67,16 @@ def main() -> None:
     n = a.reference
     t0 = time.perf_counter()
     ref = simulate(ex52.problem(0.2, 2.0, divisions=(n, n // 2), steps=STEPS), "newton")
-    xr, wr = wear_at_T(ref)
     print(f"reference {n} x {n // 2}: {time.perf_counter() - t0:.1f} s")
-
-    def error(r: Result) -> float:
-        x, w = wear_at_T(r)
-        d = np.interp(xr, x, w) - wr
-        return float(np.sqrt(np.trapezoid(d**2, xr) / np.trapezoid(wr**2, xr)))
-
-    cases: dict[str, Callable[[], tuple[int, Result]]] = {
-        f"uniform {m} x {m // 2}": _uniform(m) for m in UNIFORM
-    }
+    cases: dict[str, Case] = {f"uniform {m} x {m // 2}": _uniform(m) for m in UNIFORM}
     for div, every, theta, max_cells, level in ADAPTIVE[: 2 if a.quick else None]:
         name = f"adaptive from {div[0]} x {div[1]}, every {every}, theta {theta}, max_cells {max_cells}"
         cases[name + (f", max level {level}" if level is not None else "")] = _adaptive(
             div, every, theta, max_cells, level
         )
-    times: dict[str, list[float]] = {k: [] for k in cases}
-    found: dict[str, tuple[int, float]] = {}
-    for _ in range(a.repeat):
-        for name, run in cases.items():
-            t0 = time.perf_counter()
-            dofs, r = run()
-            times[name].append(time.perf_counter() - t0)
-            found[name] = (dofs, error(r))
+    times, found = measure(cases, a.repeat, wear_error(ref))
     base = f"uniform {UNIFORM[-1]} x {UNIFORM[-1] // 2}"
-    dofs0, med0 = found[base][0], statistics.median(times[base])
-    print(
-        "| mesh | dofs at T | wall time [s] min / median / max | wear error | "
-        "dofs / uniform 256 | time / uniform 256 |"
-    )
-    print("|---|---|---|---|---|---|")
-    for name, ts in times.items():
-        dofs, err = found[name]
-        med = statistics.median(ts)
-        print(
-            f"| {name} | {dofs} | {min(ts):.2f} / {med:.2f} / {max(ts):.2f} | {err:.2e} | "
-            f"1/{dofs0 / dofs:.1f} | 1/{med0 / med:.1f} |"
-        )
+    print(table(times, found, base, ratio=lambda q: f"1/{1 / q:.1f}"))
 
 
 if __name__ == "__main__":

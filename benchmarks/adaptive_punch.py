@@ -23,15 +23,12 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import statistics
 import tempfile
 import time
-from collections.abc import Callable
 from importlib.resources import files
 from pathlib import Path
 
-import numpy as np
-from numpy.typing import NDArray
+from adaptive_table import Case, measure, table, wear_error
 
 from vemwear.config import load_config
 from vemwear.examples.punch_mesh import punch_mesh
@@ -59,14 +56,7 @@ def punch_problem(nx: int, ny: int, where: Path) -> Problem:
     return load_config(str(d / "punch.toml")).problem
 
 
-def wear_at_T(r: Result) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The wear at the last level along the arc, by increasing x."""
-    x = r.contact_points[:, 0]
-    order = x.argsort()
-    return x[order], np.asarray(r.wear[-1])[order]
-
-
-def _uniform(n: int, where: Path) -> Callable[[], tuple[int, Result]]:
+def _uniform(n: int, where: Path) -> Case:
     def run() -> tuple[int, Result]:
         p = punch_problem(n, n // 3, where)
         return p.space.n_dofs, simulate(p, "newton")
@@ -76,7 +66,7 @@ def _uniform(n: int, where: Path) -> Callable[[], tuple[int, Result]]:
 
 def _adaptive(
     div: tuple[int, int], every: int, theta: float, max_cells: int, curved: bool, where: Path
-) -> Callable[[], tuple[int, Result]]:
+) -> Case:
     def run() -> tuple[int, Result]:
         p = punch_problem(*div, where)
         segs = simulate_adaptive(
@@ -97,45 +87,17 @@ def main() -> None:
         where = Path(tmp)
         n = a.reference
         t0 = time.perf_counter()
-        xr, wr = wear_at_T(simulate(punch_problem(n, n // 3, where), "newton"))
+        ref = simulate(punch_problem(n, n // 3, where), "newton")
         print(f"reference {n} x {n // 3}: {time.perf_counter() - t0:.1f} s")
-
-        def error(r: Result) -> float:
-            x, w = wear_at_T(r)
-            d = np.interp(xr, x, w) - wr
-            return float(np.sqrt(np.trapezoid(d**2, xr) / np.trapezoid(wr**2, xr)))
-
-        cases: dict[str, Callable[[], tuple[int, Result]]] = {
-            f"uniform {m} x {m // 3}": _uniform(m, where) for m in UNIFORM
-        }
+        cases: dict[str, Case] = {f"uniform {m} x {m // 3}": _uniform(m, where) for m in UNIFORM}
         for div, every, theta, max_cells, curved in ADAPTIVE[: 2 if a.quick else None]:
             name = (
                 f"adaptive from {div[0]} x {div[1]}, every {every}, theta {theta}, "
                 f"max_cells {max_cells}, {'on the arc' if curved else 'on the chords'}"
             )
             cases[name] = _adaptive(div, every, theta, max_cells, curved, where)
-        times: dict[str, list[float]] = {k: [] for k in cases}
-        found: dict[str, tuple[int, float]] = {}
-        for _ in range(a.repeat):
-            for name, run in cases.items():
-                t0 = time.perf_counter()
-                dofs, r = run()
-                times[name].append(time.perf_counter() - t0)
-                found[name] = (dofs, error(r))
-    base = f"uniform {UNIFORM[-1]} x {UNIFORM[-1] // 3}"
-    dofs0, med0 = found[base][0], statistics.median(times[base])
-    print(
-        "| mesh | dofs at T | wall time [s] min / median / max | wear error | "
-        f"dofs / {base} | time / {base} |"
-    )
-    print("|---|---|---|---|---|---|")
-    for name, ts in times.items():
-        dofs, err = found[name]
-        med = statistics.median(ts)
-        print(
-            f"| {name} | {dofs} | {min(ts):.2f} / {med:.2f} / {max(ts):.2f} | {err:.2e} | "
-            f"{dofs / dofs0:.2f} | {med / med0:.2f} |"
-        )
+        times, found = measure(cases, a.repeat, wear_error(ref))
+    print(table(times, found, f"uniform {UNIFORM[-1]} x {UNIFORM[-1] // 3}"))
 
 
 if __name__ == "__main__":

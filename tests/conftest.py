@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import importlib
 import json
+import subprocess
+import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -202,3 +204,24 @@ def polygon(rng, n, kind):
         X = np.column_stack([r * np.cos(th), r * np.sin(th)])
         if not is_convex(X):
             return place(rng, X)
+
+
+def segments_done(out: Path) -> int:
+    """The mesh changes an adaptive run into ``out`` has checkpointed (0 before any)."""
+    try:
+        with np.load(out / "checkpoint.npz") as z:
+            return int(json.loads(str(z["meta"]))["segment"])
+    except (OSError, ValueError, KeyError):
+        return 0
+
+
+def run_until_segments(cmd: Sequence[str], out: Path, n: int) -> subprocess.Popen:
+    """Start ``cmd`` (an adaptive ``vemwear run`` into ``out``) and return it, still
+    running, once it has checkpointed ``n`` mesh changes (at most 60 s)."""
+    proc = subprocess.Popen(list(cmd), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    t0 = time.monotonic()
+    while segments_done(out) < n:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() - t0 < 60, "no checkpoint"
+        time.sleep(0.01)
+    return proc

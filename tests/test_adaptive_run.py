@@ -12,7 +12,6 @@ import re
 import signal
 import subprocess
 import sys
-import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -21,7 +20,7 @@ import meshio
 import numpy as np
 import pytest
 
-from conftest import small_config
+from conftest import run_until_segments, segments_done, small_config
 from vemwear import run_config
 from vemwear.config import load_config
 from vemwear.runner import ResumeError
@@ -144,16 +143,13 @@ def test_sigkill_after_a_mesh_change_resumes_bitwise(tmp_path: Path) -> None:
     run_config(config, ref_out, progress=False)
     reference = _groups(ref_out / "result.h5")
     out = tmp_path / "out"
-    proc = subprocess.Popen(_cli(config, out), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    t0 = time.monotonic()
-    while _segments_done(out) < 3:  # past the third mesh change, in the middle of the run
-        assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() - t0 < 60, "no checkpoint"
-        time.sleep(0.01)
+    proc = run_until_segments(
+        _cli(config, out), out, 3
+    )  # past the third mesh change, in the middle of the run
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=30)
     assert proc.returncode == -signal.SIGKILL
-    done = _segments_done(out)
+    done = segments_done(out)
     assert 3 <= done < len(reference)
     assert json.loads((out / ".vemwear").read_text())["state"] == "running"
     with pytest.raises(ResumeError, match=r"holds a stopped run .* --resume"):
@@ -172,23 +168,10 @@ def test_sigkill_after_a_mesh_change_resumes_bitwise(tmp_path: Path) -> None:
     assert not (out / "checkpoint.npz").exists()
 
 
-def _segments_done(out: Path) -> int:
-    try:
-        with np.load(out / "checkpoint.npz") as z:
-            return int(json.loads(str(z["meta"]))["segment"])
-    except (OSError, ValueError, KeyError):
-        return 0
-
-
 def test_resume_refuses_other_adapt_settings(tmp_path: Path) -> None:
     config = _config(tmp_path, steps=KILL_STEPS)
     out = tmp_path / "out"
-    proc = subprocess.Popen(_cli(config, out), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    t0 = time.monotonic()
-    while _segments_done(out) < 1:
-        assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() - t0 < 60, "no checkpoint"
-        time.sleep(0.01)
+    proc = run_until_segments(_cli(config, out), out, 1)
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=30)
     config.write_text(config.read_text().replace("max_cells = 200", "max_cells = 150"))
@@ -294,16 +277,11 @@ def test_a_study_of_adaptive_runs(tmp_path: Path) -> None:
 def test_sigterm_keeps_the_finished_meshes_and_says_how_to_resume(tmp_path: Path) -> None:
     config = _config(tmp_path, steps=KILL_STEPS)
     out = tmp_path / "out"
-    proc = subprocess.Popen(_cli(config, out), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    t0 = time.monotonic()
-    while _segments_done(out) < 2:
-        assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() - t0 < 60, "no checkpoint"
-        time.sleep(0.01)
+    proc = run_until_segments(_cli(config, out), out, 2)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=30)
     assert proc.returncode == 130, err
-    done = _segments_done(out)
+    done = segments_done(out)
     assert f"continue with: vemwear run {config}" in err.decode() and "--resume" in err.decode()
     summary = json.loads((out / "summary.json").read_text())
     assert summary["partial"] is True and summary["completed"] == 2 * done

@@ -5,11 +5,9 @@ nodes, and the adaptive punch gets the geometry's accuracy."""
 
 from __future__ import annotations
 
-import json
 import signal
 import subprocess
 import sys
-import time
 from importlib.resources import files
 from pathlib import Path
 
@@ -17,6 +15,7 @@ import h5py
 import numpy as np
 import pytest
 
+from conftest import run_until_segments
 from vemwear.config import load_config
 from vemwear.contact.transfer import transfer_along_contact
 from vemwear.examples.punch_mesh import punch_mesh
@@ -208,12 +207,7 @@ def test_a_killed_punch_run_resumes_bitwise_on_the_arc(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     out = tmp_path / "out"
     cmd = [*run, str(out)]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    t0 = time.monotonic()
-    while _segments_done(out) < 3:
-        assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() - t0 < 60, "no checkpoint"
-        time.sleep(0.01)
+    proc = run_until_segments(cmd, out, 3)
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=30)
     resumed = subprocess.run([*cmd, "--resume"], capture_output=True, text=True)
@@ -227,11 +221,3 @@ def test_a_killed_punch_run_resumes_bitwise_on_the_arc(tmp_path: Path) -> None:
         last = f[names[-1]]
         assert len(last["contact_points"]) > 25  # the arc was refined, onto the circle
         assert _off_circle(last["contact_points"][()]).max() < 1e-6
-
-
-def _segments_done(out: Path) -> int:
-    try:
-        with np.load(out / "checkpoint.npz") as z:
-            return int(json.loads(str(z["meta"]))["segment"])
-    except (OSError, ValueError, KeyError):
-        return 0
