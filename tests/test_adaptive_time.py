@@ -15,6 +15,7 @@ from vemwear.mesh.checks import check_mesh
 from vemwear.mesh.locate import locate_cells
 from vemwear.paper import ex52
 from vemwear.simulate.adaptive_time import simulate_adaptive
+from vemwear.simulate.options import SolverOptions
 
 
 def test_one_segment_is_the_plain_run_bitwise() -> None:
@@ -150,3 +151,31 @@ def test_example_5_2_reaches_the_uniform_256_accuracy_with_a_tenth_of_the_dofs()
     assert len(segs) == 4
     assert error(segs[-1].result) < uniform
     assert 10 * segs[-1].problem.space.n_dofs <= fine.space.n_dofs
+
+
+def test_a_mesh_that_stays_keeps_its_factorization_with_the_same_levels(monkeypatch) -> None:
+    from vemwear.solvers import backends
+    from vemwear.solvers.backends import superlu
+
+    made: list[int] = []
+
+    class Counted(superlu.SuperLUSchur):  # the real factorization, counted
+        def __init__(self, *args, **kwargs) -> None:
+            made.append(1)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(superlu, "SuperLUSchur", Counted)
+    pr = ex52.problem(0.2, 2.0, divisions=(8, 4), steps=16)
+    opts = SolverOptions(method="newton", backend="scipy")
+    states = []
+    segs = simulate_adaptive(
+        pr, every=2, max_cells=60, solver=opts, on_segment=lambda s, st: states.append(st)
+    )
+    cells = [s.problem.mesh.n_cells for s in segs]
+    assert len(segs) == 8 and len(set(cells)) < len(cells) - 2  # the mesh stopped changing
+    assert len(made) == len(set(cells))  # one factorization per mesh
+    assert backends._KEEP == 0 and not backends._KEPT  # nothing kept after the run
+    # a run started on the last mesh factorizes afresh and gives the same levels, bitwise
+    again = simulate_adaptive(pr, every=2, max_cells=60, solver=opts, start=states[-2])
+    assert np.array_equal(again[-1].result.wear, segs[-1].result.wear)
+    assert np.array_equal(again[-1].result.u, segs[-1].result.u)

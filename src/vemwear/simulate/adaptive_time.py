@@ -35,6 +35,7 @@ from ..mesh.adapt import CellTree, dorfler_marking, refine_tree
 from ..mesh.coarsen import coarsen_tree, coarsening_marking
 from ..mesh.curves import OFF_CHORD, BoundaryCurve
 from ..mesh.polymesh import Mesh
+from ..solvers.backends import reusing_factorizations
 from .estimate import Estimate, estimate
 from .levels import run_levels
 from .loop import MemorySink, Result
@@ -228,19 +229,40 @@ def simulate_adaptive(
         every, theta, coarsen, max_cells, target_error, max_level, max_difference, curved
     )
     opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
-    t = problem.time.t
-    N = len(t) - 1
     mesh: Mesh = problem.mesh
     tree = CellTree.initial(mesh.n_cells)
     # the curve of the initial mesh, the same for a run started again from a state
     curve = BoundaryCurve.of(mesh) if cfg.curved else None
-    off_chord = OFF_CHORD if curve is not None and curve.any else 0.0
-    parts = tuple(pc.part for pc in problem.parts)
     w: NDArray[np.float64] | None = None
-    segments: list[Segment] = []
     n0, k = 0, 0
     if start is not None:
         n0, k, mesh, tree, w = start.first, start.segment, start.mesh, start.tree, start.wear
+    # a mesh that stays (max_cells reached, nothing marked) keeps its factorization for the
+    # next segment: the same matrix, so the same factors and bitwise the same levels
+    with reusing_factorizations() as forget:
+        return _segments(problem, cfg, opts, mesh, tree, curve, w, n0, k, forget, on_segment, keep)
+
+
+def _segments(
+    problem: Problem,
+    cfg: AdaptSettings,
+    opts: SolverOptions,
+    mesh: Mesh,
+    tree: CellTree,
+    curve: BoundaryCurve | None,
+    w: NDArray[np.float64] | None,
+    n0: int,
+    k: int,
+    forget: Callable[[], None],
+    on_segment: Callable[[Segment, AdaptiveState | None], None] | None,
+    keep: bool,
+) -> list[Segment]:
+    """The segments of :func:`simulate_adaptive` from level ``n0`` (segment ``k``) on."""
+    t = problem.time.t
+    N = len(t) - 1
+    off_chord = OFF_CHORD if curve is not None and curve.any else 0.0
+    parts = tuple(pc.part for pc in problem.parts)
+    segments: list[Segment] = []
     while True:
         n1 = min(n0 + cfg.every, N)
         pr = dataclasses.replace(problem, mesh=mesh, time=TimeGrid(t[: n1 + 1]))
@@ -265,7 +287,8 @@ def simulate_adaptive(
             w = transfer_along_contact(
                 mesh, pr.contact.nodes, w, nxt.contact.points, parts, off_chord
             )
-        pr.discrete.release_solvers()  # the old mesh's factorization
+            forget()  # the old mesh's factorization, before the new one is made
+        pr.discrete.release_solvers()
         mesh, n0, k = new, n1, k + 1
         if on_segment is not None:
             on_segment(seg, AdaptiveState(k, n0, mesh, tree, w))

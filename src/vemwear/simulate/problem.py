@@ -42,7 +42,7 @@ from ..util.hashing import sha256_arrays
 from ..vem import Material
 from ..vem.assembly import Field
 from ..vem.space import ORDERS, P1Space, P1Space3D, P2Space, has_part, make_space, part_facets
-from .constraints import Constraints, Prescribed, describe_motions
+from .constraints import Constraints, Prescribed, describe_motions, null_space_rows
 from .discrete import DataError
 from .rigidparts import RigidPart
 from .timegrid import TimeGrid
@@ -211,9 +211,7 @@ class Problem(Generic[MeshT]):
             )
             @ basis.T
         )
-        _, sv, Vt = np.linalg.svd(NR, full_matrices=True)
-        rank = int(np.sum(sv > 1e-10 * max(float(sv.max(initial=0)), 1e-300)))
-        return np.asarray(Vt[rank:] @ basis)
+        return null_space_rows(NR) @ basis
 
     @property
     def dim(self) -> int:

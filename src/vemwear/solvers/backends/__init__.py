@@ -23,7 +23,7 @@ from __future__ import annotations
 import hashlib
 import importlib
 from collections import OrderedDict
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
@@ -146,6 +146,28 @@ def keep_factorizations(n: int) -> None:
         _KEPT.popitem(last=False)
 
 
+@contextmanager
+def reusing_factorizations() -> Iterator[Callable[[], None]]:
+    """Keep at least the last Schur factorization in this block (:func:`keep_factorizations`),
+    and the caller's limit again after it.
+
+    Yields ``forget``, which drops the factorizations kept so far: a caller about to
+    factorize another matrix calls it first, so that the old factors do not stay in
+    memory beside the new ones. An adaptive run keeps the factorization of a mesh that
+    the next segment uses again.
+    """
+    previous = _KEEP
+    keep_factorizations(max(previous, 1))
+
+    def forget() -> None:
+        _KEPT.clear()
+
+    try:
+        yield forget
+    finally:
+        keep_factorizations(previous)
+
+
 def _digest(K: sp.spmatrix, *arrays: NDArray[Any], backend: str) -> bytes:
     A = sp.csr_matrix(K)
     h = hashlib.blake2b(digest_size=20)
@@ -221,5 +243,6 @@ __all__ = [
     "is_available",
     "keep_factorizations",
     "resolve_backend",
+    "reusing_factorizations",
     "schur_factorize",
 ]
