@@ -1,5 +1,5 @@
-"""The residual a posteriori estimator of the step problem, k = 1 in 2D (docs/method.md,
-section 11).
+"""The residual a posteriori estimator of the step problem in 2D (docs/method.md, section
+11); below for k = 1, :mod:`.estimate2` for the contact terms of k = 2.
 
 For a solved step (displacement ``u``, pressures ``p_soft`` and ``p_rigid`` at the
 contact nodes, wear ``w``), the squared indicator of cell K is
@@ -40,7 +40,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polymesh import Mesh
 from ..vem.estimator import EDGE_CONSTANT, GAUSS3, elasticity_terms, traction_terms
+from ..vem.estimator2 import elasticity_terms2
 from ..vem.quadrature import Field
+from .estimate2 import contact_terms2
 from .problem import Problem
 
 __all__ = ["TERMS", "Estimate", "estimate"]
@@ -105,14 +107,16 @@ def estimate(
     wear: ArrayLike | None = None,
     level: int = -1,
 ) -> Estimate:
-    """The residual estimator of the step problem at a time level (module docstring).
+    """The residual estimator of the step problem at a time level (module docstring; for
+    k = 2 the terms of :mod:`vemwear.vem.estimator2` and :mod:`.estimate2`).
 
     Parameters
     ----------
     problem : Problem
-        A 2D problem of order 1.
-    u : (n_points, 2) array_like
-        The displacement of the step.
+        A 2D problem of order 1 or 2.
+    u : array_like
+        The displacement of the step: the vertex values (n_points, 2) for k = 1; all the
+        dofs (``problem.space.n_dofs``,) for k = 2 (``Result.dofs``).
     p_rigid : (m,) array_like
         The rigid-layer pressure at the contact nodes.
     wear : (m,) array_like, optional
@@ -125,22 +129,41 @@ def estimate(
     Estimate
     """
     mesh = problem.mesh
-    if not isinstance(mesh, Mesh) or problem.order != 1:
-        raise ValueError("the a posteriori estimator is implemented for k = 1 in 2D")
+    if not isinstance(mesh, Mesh) or problem.order not in (1, 2):
+        raise ValueError("the a posteriori estimator is implemented for k = 1 and 2 in 2D")
     t = float(problem.time.t[level])
     mat = problem.material
-    U = np.asarray(u, dtype=float).reshape(mesh.n_points, 2)
     loads, contact = _boundary_roles(problem)
-    terms, sig = elasticity_terms(
-        mesh,
-        mat,
-        U,
-        problem.f1,
-        loads,
-        problem.stabilization,
-        t,  # type: ignore[arg-type]
-    )
-    con, comp = _contact_terms(problem, U, sig, np.asarray(p_rigid, float), wear, t, contact)
+    pr = np.asarray(p_rigid, float)
+    if problem.order == 2:
+        v = np.asarray(u, dtype=float).reshape(-1)
+        if v.size != problem.space.n_dofs:
+            raise ValueError(
+                f"k = 2: u must hold all {problem.space.n_dofs} dofs of the space (Result.dofs), "
+                f"got {v.size} values"
+            )
+        terms, fields = elasticity_terms2(
+            mesh,
+            mat,
+            v,
+            problem.f1,
+            loads,
+            problem.stabilization,
+            t,  # type: ignore[arg-type]
+        )
+        con, comp = contact_terms2(problem, v, fields, pr, wear, t, contact)
+    else:
+        U = np.asarray(u, dtype=float).reshape(mesh.n_points, 2)
+        terms, sig = elasticity_terms(
+            mesh,
+            mat,
+            U,
+            problem.f1,
+            loads,
+            problem.stabilization,
+            t,  # type: ignore[arg-type]
+        )
+        con, comp = _contact_terms(problem, U, sig, pr, wear, t, contact)
     terms["contact"] = EDGE_CONSTANT**2 / mat.coercivity * con
     terms["complementarity"] = comp
     return Estimate(terms)
