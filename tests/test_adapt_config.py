@@ -53,7 +53,6 @@ def test_the_settings_reach_the_adaptive_run() -> None:
         ),
         ({"every": 2, "max_cells": 100, "estimator": "zz"}, {}, "[adapt] estimator must be"),
         ({"every": 2, "max_cells": 100, "max_cell": 3}, {}, "did you mean 'max_cells'"),
-        ({"every": 2, "max_cells": 100}, {"vem": {"order": 2}}, "[vem] order = 2"),
         ({"every": 2, "max_cells": 100}, {"output": {"store_u": "all"}}, "[output] store_u"),
         ({"every": 2, "max_cells": 100}, {"output": {"every": 2}}, "[output] every"),
         (

@@ -5,8 +5,8 @@
 :class:`~vemwear.simulate.adaptive_time.AdaptSettings` of
 :func:`~vemwear.simulate.adaptive_time.simulate_adaptive` and refuses, before anything
 is solved, the settings that contradict each other or that the adaptive path cannot
-honour (a 3D mesh or k = 2, for which the residual estimator is not implemented; a
-cycle-jump run; stored levels it does not keep), each in one line naming the key.
+honour (a 3D mesh, for which the residual estimator is not implemented; a cycle-jump
+run; stored levels it does not keep), each in one line naming the key.
 """
 
 from __future__ import annotations
@@ -24,12 +24,12 @@ __all__ = ["Adapt", "adapt_settings"]
 
 
 class Adapt(Section):
-    """Adaptive meshes in time (docs/method.md section 11; k = 1, 2D)."""
+    """Adaptive meshes in time (docs/method.md section 11; k = 1 and 2, 2D)."""
 
     estimator: Literal["residual"] = Field(
         "residual",
         description="the a posteriori estimator that marks the cells: 'residual' (the "
-        "residual estimator of docs/method.md section 11, k = 1 in 2D)",
+        "residual estimator of docs/method.md section 11, k = 1 and 2 in 2D)",
     )
     every: int = Field(ge=1, description="time levels between mesh changes, >= 1")
     theta: float = Field(
@@ -101,10 +101,10 @@ def adapt_settings(
             f"{src}: [adapt] the {a.estimator} estimator and the refinement are implemented "
             f"for 2D meshes; [mesh] is {dim}D (remove [adapt])"
         )
-    if order != 1:
+    if order not in (1, 2):
         raise ConfigError(
-            f"{src}: [adapt] the {a.estimator} estimator is implemented for k = 1; [vem] order "
-            f"= {order} (remove [adapt] or use order = 1)"
+            f"{src}: [adapt] the {a.estimator} estimator is implemented for k = 1 and 2; [vem] "
+            f"order = {order} (remove [adapt] or use order = 1 or 2)"
         )
     if a.max_cells is not None and a.max_cells < n_cells:
         raise ConfigError(

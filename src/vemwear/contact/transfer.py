@@ -2,9 +2,11 @@
 section 11): the wear when an adaptive mesh changes.
 
 A value of the old mesh lives at its contact nodes and is piecewise linear along its
-contact edges (docs/method.md section 3). A new node that is an old vertex takes the old
-value there, exactly (bitwise); a new node inside an old contact edge (a midpoint made by
-refinement) takes the linear interpolant along that edge. An end of an old edge that is
+contact edges (docs/method.md section 3), or for k = 2 piecewise quadratic through the
+vertices and the edge midpoints. A new node that is an old node takes the old value
+there, exactly (bitwise): a kept vertex, or for k = 2 an old midpoint that refinement
+made a vertex; a new node inside an old contact edge takes the interpolant along that
+edge. An end of an old edge that is
 not a contact node (a clamped end of Gamma_C) carries 0, the convention of the nodal
 quadrature (its weight there is 0): refinement then keeps the integral of the values by
 the nodal quadrature, and the worn volume with it.
@@ -24,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.locate import extent_tol, point_segment_distance
 from ..mesh.polymesh import Mesh, MeshError
+from ..vem.dofs2 import edge_ids
 
 __all__ = ["transfer_along_contact"]
 
@@ -44,7 +47,8 @@ def transfer_along_contact(
     mesh : Mesh
         The old mesh.
     nodes : (m,) int array_like
-        Its contact nodes (vertex ids, k = 1).
+        Its contact nodes: vertex ids (k = 1), and for k = 2 edge midpoints as
+        ``n_points + e``, ``e`` the row of :attr:`Mesh.edges`.
     values : (m,) array_like
         The values there.
     points : (q, 2) array_like
@@ -70,11 +74,15 @@ def transfer_along_contact(
     E = np.concatenate([mesh.part_edges(p) for p in parts])
     if len(E) == 0:
         raise MeshError(f"the mesh has no edges on the contact parts {list(parts)}")
-    node_of = np.full(mesh.n_points, -1, dtype=np.int64)
+    quadratic = bool(np.any(nodes >= mesh.n_points))  # k = 2: midpoint nodes
+    node_of = np.full(mesh.n_points + (len(mesh.edges) if quadratic else 0), -1, dtype=np.int64)
     node_of[nodes] = np.arange(len(nodes))
     ia, ib = node_of[E[:, 0]], node_of[E[:, 1]]
     va = np.where(ia >= 0, v[np.maximum(ia, 0)], 0.0) if len(v) else np.zeros(len(E))
     vb = np.where(ib >= 0, v[np.maximum(ib, 0)], 0.0) if len(v) else np.zeros(len(E))
+    if quadratic:
+        im = node_of[mesh.n_points + edge_ids(mesh, E[:, 0], E[:, 1])]
+        vm = np.where(im >= 0, v[np.maximum(im, 0)], 0.0)
     A, B = mesh.points[E[:, 0]], mesh.points[E[:, 1]]
     from scipy.spatial import cKDTree  # imported when used: a run without adaptivity never is
 
@@ -95,9 +103,14 @@ def transfer_along_contact(
             f"new contact node {q} at {X[q].tolist()} lies on no contact edge of the old mesh"
         )
     t = s[rows, best]
-    out = (1.0 - t) * va[e] + t * vb[e]
-    # kept vertices: the old value itself, not a rounded interpolant
     L = np.linalg.norm(B[e] - A[e], axis=1)
+    if quadratic:  # the quadratic through the start, the midpoint and the end
+        out = (1 - t) * (1 - 2 * t) * va[e] + 4 * t * (1 - t) * vm[e] + t * (2 * t - 1) * vb[e]
+        at_m = np.abs(t - 0.5) * L <= tol  # an old midpoint, now a vertex: its value
+        out[at_m] = vm[e[at_m]]
+    else:
+        out = (1.0 - t) * va[e] + t * vb[e]
+    # kept vertices: the old value itself, not a rounded interpolant
     at_a = t * L <= tol
     at_b = (1.0 - t) * L <= tol
     out[at_a] = va[e[at_a]]

@@ -189,7 +189,7 @@ def simulate_adaptive(
     Parameters
     ----------
     problem : Problem
-        A 2D problem of order 1 on its initial mesh.
+        A 2D problem of order 1 or 2 on its initial mesh.
     every : int
         Levels between mesh changes (>= 1).
     theta : float
@@ -223,8 +223,8 @@ def simulate_adaptive(
     list of Segment
         From ``start`` on.
     """
-    if not isinstance(problem.mesh, Mesh) or problem.order != 1:
-        raise ValueError("adaptive runs are implemented for k = 1 in 2D")
+    if not isinstance(problem.mesh, Mesh) or problem.order not in (1, 2):
+        raise ValueError("adaptive runs are implemented for k = 1 and 2 in 2D")
     cfg = AdaptSettings(
         every, theta, coarsen, max_cells, target_error, max_level, max_difference, curved
     )
@@ -272,7 +272,9 @@ def _segments(
         run_levels(pr, opts, sink, plan, start=state, timings=sink.result.timings)
         res = sink.result
         res.completed = n1 + 1
-        est = estimate(pr, res.u[-1], res.p_rigid[-1], res.wear[-1], level=n1)
+        # k = 2: the estimator needs every dof (the edge and cell means too)
+        u_last = res.u[-1] if res.dofs is None else res.dofs[-1]
+        est = estimate(pr, u_last, res.p_rigid[-1], res.wear[-1], level=n1)
         seg = Segment(pr, n0, n1, res, est, tree)
         if keep:
             segments.append(seg)
