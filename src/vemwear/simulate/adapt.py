@@ -78,7 +78,7 @@ def adapt(
     Parameters
     ----------
     problem : Problem
-        A 2D problem of order 1; its last level is the step the estimator sees.
+        A 2D problem of order 1 or 2; its last level is the step the estimator sees.
     theta : float
         Dörfler's bulk fraction in (0, 1].
     max_cells : int, optional
@@ -102,8 +102,8 @@ def adapt(
     list of AdaptiveStep
         One per solve, in order.
     """
-    if not isinstance(problem.mesh, Mesh) or problem.order != 1:
-        raise ValueError("adaptive refinement is implemented for k = 1 in 2D")
+    if not isinstance(problem.mesh, Mesh) or problem.order not in (1, 2):
+        raise ValueError("adaptive refinement is implemented for k = 1 and 2 in 2D")
     if max_cells is not None and max_cells < problem.mesh.n_cells:
         raise ValueError(
             f"max_cells = {max_cells} is below the initial mesh's {problem.mesh.n_cells} cells"
@@ -118,7 +118,8 @@ def adapt(
     pr = problem
     for k in range(max_passes):
         res = simulate(pr, solver, store="final")
-        est = estimate(pr, res.u[-1], res.p_rigid[-1], res.wear[-1])
+        u_last = res.u[-1] if res.dofs is None else res.dofs[-1]  # k = 2: every dof
+        est = estimate(pr, u_last, res.p_rigid[-1], res.wear[-1])
         done = k == max_passes - 1 or (target_error is not None and est.total <= target_error)
         marked = np.zeros(0, dtype=np.int64)
         nxt = None
