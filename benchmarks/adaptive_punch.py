@@ -8,7 +8,8 @@ quadrilaterals over the arc ``y = R - sqrt(R^2 - x^2)``) is written with the shi
 wear at T, interpolated along the arc onto the contact nodes of a uniform reference
 mesh (``--reference``, default 384 x 128), gives the relative L2 error along the arc;
 the table lists the dofs at T, the wall time of the run (set-up included, in this
-process) and that error, for uniform meshes 48 x 16 ... 192 x 64 and for adaptive runs
+process) and that error, for uniform meshes 48 x 16 ... 192 x 64, for a mesh refined a
+priori along the part of the arc that the contact zone reaches, and for adaptive runs
 (:func:`vemwear.simulate.simulate_adaptive`) of several settings. The runs are repeated
 ``--repeat`` times, interleaved (every case once, then again), and the wall times are
 given as min / median / max; the last columns compare each run's dofs and median wall
@@ -23,16 +24,20 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import tempfile
 import time
 from importlib.resources import files
 from pathlib import Path
 
+import numpy as np
 from adaptive_table import Case, measure, table, wear_error
 
 from vemwear.config import load_config
 from vemwear.examples.punch_mesh import punch_mesh
 from vemwear.mesh import write_mesh
+from vemwear.mesh.curves import BoundaryCurve
+from vemwear.mesh.refine import refine_cells
 from vemwear.simulate import Result, simulate, simulate_adaptive
 from vemwear.simulate.problem import Problem
 
@@ -45,6 +50,9 @@ ADAPTIVE = [
     ((96, 32), 4, 0.5, 8000, True),
     ((96, 32), 4, 0.5, 8000, False),
 ]
+
+#: Meshes refined a priori along the arc: initial divisions, rounds, half-width in x.
+BAND = [((48, 16), 2, 0.3)]
 
 
 def punch_problem(nx: int, ny: int, where: Path) -> Problem:
@@ -59,6 +67,25 @@ def punch_problem(nx: int, ny: int, where: Path) -> Problem:
 def _uniform(n: int, where: Path) -> Case:
     def run() -> tuple[int, Result]:
         p = punch_problem(n, n // 3, where)
+        return p.space.n_dofs, simulate(p, "newton")
+
+    return run
+
+
+def _band(div: tuple[int, int], rounds: int, width: float, where: Path) -> Case:
+    """The uniform mesh refined ``rounds`` times, a priori, in the cells along the arc
+    with |x| <= ``width`` (new vertices on the arc): the mesh an engineer who knows where
+    the contact zone will be would make."""
+
+    def run() -> tuple[int, Result]:
+        p = punch_problem(*div, where)
+        mesh, curve = p.mesh, BoundaryCurve.of(p.mesh)
+        for _ in range(rounds):
+            rows = mesh.boundary_tags == mesh.part_code("contact")
+            cells = np.unique(mesh.boundary_edge_cells[rows])
+            x = np.array([mesh.points[mesh.cells[c]][:, 0].mean() for c in cells])
+            mesh = refine_cells(mesh, cells[np.abs(x) <= width], curve=curve)
+        p = dataclasses.replace(p, mesh=mesh)
         return p.space.n_dofs, simulate(p, "newton")
 
     return run
@@ -90,6 +117,10 @@ def main() -> None:
         ref = simulate(punch_problem(n, n // 3, where), "newton")
         print(f"reference {n} x {n // 3}: {time.perf_counter() - t0:.1f} s")
         cases: dict[str, Case] = {f"uniform {m} x {m // 3}": _uniform(m, where) for m in UNIFORM}
+        for div, rounds, width in BAND:
+            cases[f"{div[0]} x {div[1]} refined {rounds} times along the arc, |x| <= {width}"] = (
+                _band(div, rounds, width, where)
+            )
         for div, every, theta, max_cells, curved in ADAPTIVE[: 2 if a.quick else None]:
             name = (
                 f"adaptive from {div[0]} x {div[1]}, every {every}, theta {theta}, "
