@@ -167,7 +167,6 @@ def check_conforming(mesh: Mesh, rtol: float = 1e-9) -> None:
 def _check_nested_pieces(mesh: Mesh) -> None:
     """Pieces of the mesh (cells connected through shared edges) must not lie inside
     one another: a cell placed inside another cell shares no edge with it."""
-    from matplotlib.path import Path
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -178,6 +177,9 @@ def _check_nested_pieces(mesh: Mesh) -> None:
     npieces, piece = connected_components(graph, directed=False)
     if npieces == 1:
         return
+    # only now: importing matplotlib costs a mesh read from a file about half a second
+    from matplotlib.path import Path
+
     be, owner = mesh.boundary_edges, piece[mesh.boundary_edge_cells]
     for k in range(npieces):
         edges = be[owner == k]
