@@ -63,7 +63,9 @@ column per level (the linear algebra the run cannot do without); the table gives
 median and vemwear's median compute time over it. A second table splits vemwear's
 compute time by phase (from ``result.timings``): before the time loop (mesh, problem,
 assembly, result arrays), the factorization with the Schur block, and the levels with
-the recovery of u.
+the recovery of u. A third gives the CPU time of the compute (``time.process_time``
+in each child: all its threads), which waiting for a busy machine's cores does not
+inflate; with one thread on each side its ratio is the comparison of the work done.
 
 Threads: neither side is told anything by default (GetFEM's build has no OpenMP;
 MUMPS calls OpenBLAS, vemwear's default backend is PARDISO with MKL's threads where
@@ -122,7 +124,7 @@ f1, v_star = d["f1"], d["v_star"]
 CONTACT, CLAMPED = 1, 2
 
 def solve(P, TRI, steps):
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     m = gf.Mesh("pt2D", P, TRI) if dim == 2 else gf.Mesh("ptND", P, TRI)
     if m.nbpts() != P.shape[1] or np.abs(m.pts() - P).max() > 0:
         raise SystemExit("GetFEM renumbered the mesh points")
@@ -191,15 +193,16 @@ def solve(P, TRI, steps):
             u_nu = -md.variable("u")[uy]  # outward normal -e_dim
             w[cd] += k * alpha * cp * np.maximum(u_nu - w[cd], 0.0)
             md.set_variable("w", w)
-    return time.perf_counter() - t0, iters, xs[:, o1].T, w[cd], int(mfu.nbdof())
+    cpu = time.process_time() - c0
+    return time.perf_counter() - t0, cpu, iters, xs[:, o1].T, w[cd], int(mfu.nbdof())
 
 
 # a small run first: first-call set-up of the libraries is not compute time
 solve(np.ascontiguousarray(d["warm_points"].T),
       np.ascontiguousarray(d["warm_cells"].T.astype(np.int32)), 2)
-compute, iters, x_out, w_out, ndof = solve(P, TRI, steps)
+compute, cpu, iters, x_out, w_out, ndof = solve(P, TRI, steps)
 np.savez(out_file, x=x_out, w=w_out)
-print(json.dumps({"compute": compute, "iterations": iters, "dofs": ndof}))
+print(json.dumps({"compute": compute, "cpu": cpu, "iterations": iters, "dofs": ndof}))
 """
 
 _VEMWEAR_CHILD = r"""
@@ -226,7 +229,7 @@ a = json.loads(sys.argv[1])
 
 
 def solve(divisions, steps):
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     if len(divisions) == 2:
         mesh = tag_rectangle(rectangle_triangles((2.0, 1.0), divisions))
     else:  # clamped at x = 0, contact at z = 0, traction-free elsewhere
@@ -237,7 +240,7 @@ def solve(divisions, steps):
         kappa=a["kappa"], v_star=tuple(a["v_star"]),
     )
     r = simulate(pr, SolverOptions("newton", backend=a["backend"]))
-    return time.perf_counter() - t0, pr, r
+    return time.perf_counter() - t0, time.process_time() - c0, pr, r
 
 
 # the run's linear algebra alone, on its matrix: assembly of K, factorization with the
@@ -252,14 +255,14 @@ def floor(pr, levels):
 
 
 solve(a["warm"], 2)  # first-call set-up of the libraries is not compute time
-compute, pr, r = solve(a["divisions"], a["steps"])
+compute, cpu, pr, r = solve(a["divisions"], a["steps"])
 mesh = pr.mesh
 np.savez(a["out"], x=r.contact_points, w=r.wear[-1])
 # where the compute time goes: before the time loop (mesh, problem, assembly, result
 # arrays), the factorization with its Schur block, the levels with the recovery of u
 tm = r.timings
 phases = {"before": compute - tm["total"], "setup": tm["setup"], "loop": tm["time_loop"]}
-print(json.dumps({"compute": compute, "floor": floor(pr, len(r.t)), "phases": phases,
+print(json.dumps({"compute": compute, "cpu": cpu, "floor": floor(pr, len(r.t)), "phases": phases,
                   "iterations": int(r.iterations.sum()),
                   "dofs": mesh.points.size, "levels": len(r.t),
                   "backend": resolve_backend(a["backend"])}))
@@ -438,7 +441,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     what = "Example 5.2 set 1 on triangles" if dim == 2 else "the 3D example on tetrahedra"
     print(f"{what}, {args.steps} steps ({args.steps + 1} levels), interleaved x {args.repeat}")
-    cols = ("gf", "vem", "gf_whole", "vem_whole", "floor")
+    cols = ("gf", "vem", "gf_whole", "vem_whole", "floor", "gf_cpu", "vem_cpu")
     with tempfile.TemporaryDirectory() as tmp:
         child = os.path.join(tmp, "getfem_child.py")
         with open(child, "w") as fh:
@@ -456,7 +459,9 @@ def main(argv: list[str] | None = None) -> int:
                 spec = _spec(n, dim, args.steps, args.backend, vem_out)
                 v, v_wall = _run([sys.executable, "-c", _VEMWEAR_CHILD, json.dumps(spec)], env)
                 for c, val in zip(
-                    cols, (g["compute"], v["compute"], g_wall, v_wall, v["floor"]), strict=True
+                    cols,
+                    (g["compute"], v["compute"], g_wall, v_wall, v["floor"], g["cpu"], v["cpu"]),
+                    strict=True,
                 ):
                     times[n][c].append(val)
                 for k, val in v["phases"].items():
@@ -508,6 +513,18 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"{_label(n, dim):>8}  before {ph['before']:8.2f}  set-up {ph['setup']:8.2f}"
             f"  levels {ph['loop']:8.2f}  of {1e3 * statistics.median(times[n]['vem']):8.2f}"
+        )
+    print(
+        "CPU time of the compute (all threads of each child; on a loaded machine the wall "
+        "time waits for the cores, the CPU time does not), seconds: min med max"
+    )
+    for n in sizes:
+        t = times[n]
+        ratio_cpu = statistics.median(t["gf_cpu"]) / statistics.median(t["vem_cpu"])
+        info[n].update(ratio_cpu=ratio_cpu, gf_cpu=t["gf_cpu"], vem_cpu=t["vem_cpu"])
+        print(
+            f"{_label(n, dim):>8}  GetFEM {_stats(t['gf_cpu'])}  vemwear {_stats(t['vem_cpu'])}"
+            f"  ratio {ratio_cpu:6.1f}"
         )
     used = sorted({info[n]["backend"] for n in sizes})
     print(f"vemwear's backend: {', '.join(used)}; GetFEM's linear solver: {args.lsolver}")
