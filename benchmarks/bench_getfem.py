@@ -69,7 +69,8 @@ inflate; with one thread on each side its ratio is the comparison of the work do
 
 Threads: neither side is told anything by default (GetFEM's build has no OpenMP;
 MUMPS calls OpenBLAS, vemwear's default backend is PARDISO with MKL's threads where
-installed). ``--threads N`` sets OMP/OPENBLAS/MKL_NUM_THREADS=N in both children.
+installed, on one thread below 20,000 unknowns: ``SCHUR_SERIAL_MAX``). ``--threads N``
+sets OMP/OPENBLAS/MKL_NUM_THREADS=N in both children.
 SciPy's SuperLU (``--backend scipy``) is vemwear's single-threaded direct solver.
 GetFEM's own SuperLU (``--lsolver superlu``) crashes (SIGSEGV) in Debian's 5.4.2 build,
 even on plain linear elasticity, so MUMPS is its only direct solver there.

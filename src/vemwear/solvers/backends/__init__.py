@@ -8,7 +8,8 @@ scipy     SciPy's SuperLU, trailing block of the full LU factors      always
 petsc     MUMPS through PETSc, on the ranks of an MPI job (ICNTL(19))  ``petsc4py``
 ========  ==========================================================  ==============
 
-``"auto"`` picks the first installed backend of :data:`PREFERENCE`; ``"petsc"`` is
+``"auto"`` picks the first installed backend of :data:`PREFERENCE` (PARDISO's Schur
+factorization on one MKL thread below :data:`SCHUR_SERIAL_MAX` unknowns); ``"petsc"`` is
 only used when asked for (``mpirun -n N vemwear run ... --backend petsc``: docs/mpi.md),
 and only for the Schur factorization of the condensed scheme. A new backend
 (MUMPS through a binding that imports with the installed NumPy, for one; its Schur
