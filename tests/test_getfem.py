@@ -78,3 +78,12 @@ def test_contact_nodes_are_matched_by_their_coordinates(tmp_path):
     np.savez(tmp_path / "v.npz", x=np.array([[0.25, 0.0]]), w=np.array([0.1]))
     with pytest.raises(SystemExit, match="contact nodes of the two codes differ"):
         bench._agreement(str(tmp_path / "v.npz"), str(tmp_path / "g.npz"))
+
+
+def test_without_getfem_the_script_says_so_and_exits_0(tmp_path):
+    missing = tmp_path / "no-python"
+    for extra in ((), ("--3d",)):
+        cmd = [sys.executable, str(SCRIPT), *extra, "--getfem-python", str(missing)]
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        assert f"GetFEM is not importable (tried {missing})" in proc.stdout
