@@ -11,6 +11,9 @@ The floor, on the same matrix in the same run:
 
 * ``floor pardiso``: a plain SPD factorization by PARDISO (no Schur block) and its
   block solve (phase 33), if PARDISO is installed;
+* ``pardiso 1 thread``: PARDISO's Schur factorization on one MKL thread, as ``"auto"``
+  makes it below ``SCHUR_SERIAL_MAX`` unknowns (the crossover: ``--n 16 32 64 96 128
+  --rhs 65``, 65 columns as in the 64-step runs of ``benchmarks/bench_getfem.py``);
 * ``floor superlu``: SciPy's SuperLU with its default ordering, factorization and
   block solve (the plain path; skipped above ``--superlu-max`` unknowns).
 
@@ -61,7 +64,18 @@ def _cases(K, contact, points, rhs: int, superlu_max: int) -> dict[str, Callable
 
     for b in available_backends():
         cases[f"{b} + Schur"] = schur(b)
-    if "pardiso" in available_backends():
+    if "pardiso" in available_backends():  # what "auto" does below SCHUR_SERIAL_MAX
+        from threadpoolctl import ThreadpoolController
+
+        serial = schur("pardiso")
+        schur_factorize(K, contact, points, "pardiso")  # MKL loaded, seen by threadpoolctl
+        mkl = ThreadpoolController().select(internal_api="mkl")
+
+        def pardiso_one_thread() -> tuple:
+            with mkl.limit(limits=1):  # the factorization keeps the count for its solves
+                return serial()
+
+        cases["pardiso 1 thread"] = pardiso_one_thread
         from vemwear.solvers.backends.pardiso import PardisoFactor
 
         def floor_pardiso() -> tuple:

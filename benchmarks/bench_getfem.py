@@ -1,4 +1,4 @@
-"""vemwear against GetFEM 5.4 on Example 5.2 with triangles, where the method is P1 FEM.
+"""vemwear against GetFEM 5.4 on triangles and tetrahedra, where the method is P1 FEM.
 
 On triangles the lowest-order virtual element space is the P1 finite element space
 and the projection is exact (docs/method.md §2), so vemwear and a P1 code that makes
@@ -11,6 +11,17 @@ f1 = (0, -0.06), p(r) = 0.4 r_+, g = 0.1, mu = 0.2, kappa = 2, v* = (1, 0), T = 
 65 levels t_0 ... t_64; the same grid at every size, so the cost per level is compared).
 Each child first solves the same problem on 4 x 2 rectangles with 2 steps, so that
 the first-call set-up of its libraries (MUMPS, MKL, SciPy) is not counted as compute.
+
+``--3d``: the 3D example of ``benchmarks/bench_3d.py`` on vemwear's ``tetrahedra`` mesh
+of (0, 2) x (0, 1) x (0, 1) (every grid hexahedron cut into six, Kuhn), size n meaning
+n x n/2 x n/2 hexahedra (8 16 24 by default): clamped at x = 0, contact at z = 0,
+traction-free elsewhere, f1 = (0, 0, -0.06), v* = (1, 0, 0), the data above. The
+lowest-order space on tetrahedra is P1 too, and vemwear weighs a contact node by its
+share of the contact faces' areas (``P1Space3D.trace_weights``: |F| / 3 at each vertex
+of a triangle), which is the vertex rule of GetFEM's ``IM_NC(3,1)`` on the faces of the
+tetrahedra. The GetFEM child is the same with ``Mesh('ptND')``, ``FEM_PK(3,1)``,
+``IM_TETRAHEDRON(2)`` and the normal -e_z; the friction direction nstar = -v*/|v*| is
+tangent to the contact plane. The warm-up is 4 x 2 x 2.
 
 * **GetFEM** (a child process with an interpreter that can ``import getfem``: this one,
   else Debian's ``/usr/bin/python3`` with ``python3-getfem``; if neither, the script
@@ -32,7 +43,7 @@ the first-call set-up of its libraries (MUMPS, MKL, SciPy) is not counted as com
   w^{n+1} = w^n + k kappa |v*| p(u_nu^n - w^n) is updated at the nodes in NumPy and
   passed back as data.
 * **vemwear** (a child process of this interpreter): ``rectangle_triangles`` +
-  ``tag_rectangle`` + ``Problem`` + ``simulate(problem, SolverOptions("newton",
+  ``tag_rectangle`` (3D: ``box_tetrahedra`` + ``tag_box``) + ``Problem`` + ``simulate(problem, SolverOptions("newton",
   backend=--backend))``, storing u at every level (GetFEM has it at every level too).
 
 Both children solve all levels t_0 ... t_N. **Compute** time is measured inside each
@@ -52,11 +63,14 @@ column per level (the linear algebra the run cannot do without); the table gives
 median and vemwear's median compute time over it. A second table splits vemwear's
 compute time by phase (from ``result.timings``): before the time loop (mesh, problem,
 assembly, result arrays), the factorization with the Schur block, and the levels with
-the recovery of u.
+the recovery of u. A third gives the CPU time of the compute (``time.process_time``
+in each child: all its threads), which waiting for a busy machine's cores does not
+inflate; with one thread on each side its ratio is the comparison of the work done.
 
 Threads: neither side is told anything by default (GetFEM's build has no OpenMP;
 MUMPS calls OpenBLAS, vemwear's default backend is PARDISO with MKL's threads where
-installed). ``--threads N`` sets OMP/OPENBLAS/MKL_NUM_THREADS=N in both children.
+installed, on one thread below 20,000 unknowns: ``SCHUR_SERIAL_MAX``). ``--threads N``
+sets OMP/OPENBLAS/MKL_NUM_THREADS=N in both children.
 SciPy's SuperLU (``--backend scipy``) is vemwear's single-threaded direct solver.
 GetFEM's own SuperLU (``--lsolver superlu``) crashes (SIGSEGV) in Debian's 5.4.2 build,
 even on plain linear elasticity, so MUMPS is its only direct solver there.
@@ -66,6 +80,9 @@ Usage::
     python benchmarks/bench_getfem.py                              # 32x16 ... 256x128
     python benchmarks/bench_getfem.py --sizes 32 64 --repeat 5 --steps 16
     python benchmarks/bench_getfem.py --threads 1 --backend scipy  # one thread each
+    python benchmarks/bench_getfem.py --3d --sizes 8 16 24         # tetrahedra
+
+``--json FILE`` also writes the table's numbers (times, iterations, agreement) per size.
 """
 
 from __future__ import annotations
@@ -81,12 +98,14 @@ import time
 
 import numpy as np
 
-# Problem data (Example 5.2, data set 1); the GetFEM child receives them in its .npz.
+# Problem data (Example 5.2, data set 1, and its 3D analogue of benchmarks/bench_3d.py,
+# by the dimension); the GetFEM child receives them in its .npz.
 LAM, ETA = 4.0, 4.0
-F1 = (0.0, -0.06)
+F1 = {2: (0.0, -0.06), 3: (0.0, 0.0, -0.06)}
 C_P, G, MU, KAPPA = 0.4, 0.1, 0.2, 2.0
-V_STAR = (1.0, 0.0)
+V_STAR = {2: (1.0, 0.0), 3: (1.0, 0.0, 0.0)}
 T_END = 1.0
+SIDES = {"clamped": "xmin", "contact": "zmin", "traction": ["xmax", "ymin", "ymax", "zmax"]}
 
 _GETFEM_CHILD = r"""
 import json, sys, time
@@ -99,24 +118,28 @@ mesh_file, out_file, lsolver = sys.argv[1], sys.argv[2], sys.argv[3]
 d = np.load(mesh_file)
 P = np.ascontiguousarray(d["points"].T)
 TRI = np.ascontiguousarray(d["cells"].T.astype(np.int32))
+dim = P.shape[0]  # triangles in 2D, tetrahedra in 3D
 steps, T_end = int(d["steps"]), float(d["T"])
 lam, eta, cp, g, mu, kappa = (float(d[k]) for k in ("lam", "eta", "cp", "g", "mu", "kappa"))
 f1, v_star = d["f1"], d["v_star"]
 CONTACT, CLAMPED = 1, 2
 
 def solve(P, TRI, steps):
-    t0 = time.perf_counter()
-    m = gf.Mesh("pt2D", P, TRI)
+    t0, c0 = time.perf_counter(), time.process_time()
+    m = gf.Mesh("pt2D", P, TRI) if dim == 2 else gf.Mesh("ptND", P, TRI)
     if m.nbpts() != P.shape[1] or np.abs(m.pts() - P).max() > 0:
         raise SystemExit("GetFEM renumbered the mesh points")
-    m.set_region(CONTACT, m.outer_faces_with_direction([0.0, -1.0], 0.01))
-    m.set_region(CLAMPED, m.outer_faces_with_direction([-1.0, 0.0], 0.01))
-    mfu = gf.MeshFem(m, 2)
-    mfu.set_fem(gf.Fem("FEM_PK(2,1)"))
+    down, left = -np.eye(dim)[dim - 1], -np.eye(dim)[0]
+    m.set_region(CONTACT, m.outer_faces_with_direction(down, 0.01))
+    m.set_region(CLAMPED, m.outer_faces_with_direction(left, 0.01))
+    mfu = gf.MeshFem(m, dim)
+    mfu.set_fem(gf.Fem(f"FEM_PK({dim},1)"))
     mfs = gf.MeshFem(m, 1)
-    mfs.set_fem(gf.Fem("FEM_PK(2,1)"))
-    mim = gf.MeshIm(m, gf.Integ("IM_TRIANGLE(2)"))
-    mim_c = gf.MeshIm(m, gf.Integ("IM_NC(2,1)"))  # faces: trapezoidal rule = nodal quadrature
+    mfs.set_fem(gf.Fem(f"FEM_PK({dim},1)"))
+    mim = gf.MeshIm(m, gf.Integ("IM_TRIANGLE(2)" if dim == 2 else "IM_TETRAHEDRON(2)"))
+    # faces: the vertex rule (trapezoidal on edges, |F|/3 at each vertex of a triangle),
+    # vemwear's nodal quadrature
+    mim_c = gf.MeshIm(m, gf.Integ(f"IM_NC({dim},1)"))
 
     md = gf.Model("real")
     md.add_fem_variable("u", mfu)
@@ -145,12 +168,12 @@ def solve(P, TRI, steps):
         "lam*(Test_u.Normal) - (1/r)*(lam - pos_part(lam + r*(u.Normal - g)))*Test_lam",
         CONTACT,
     )
-    # the contact nodes: scalar dofs of w and the y dofs of u at the same points
+    # the contact nodes: scalar dofs of w and the normal (last) dofs of u at the same points
     cd = mfs.basic_dof_on_region(CONTACT)
     ud = mfu.basic_dof_on_region(CONTACT)
     un = mfu.basic_dof_nodes()
-    uy = ud[1::2]
-    if np.abs(un[:, ud[0::2]] - un[:, uy]).max() > 0:
+    uy = ud[dim - 1 :: dim]
+    if np.abs(un[:, ud[0::dim]] - un[:, uy]).max() > 0:
         raise SystemExit("unexpected dof layout of the vector P1 space")
     xs = mfs.basic_dof_nodes()[:, cd]
     o1, o2 = np.lexsort(xs[::-1]), np.lexsort(un[:, uy][::-1])
@@ -168,18 +191,19 @@ def solve(P, TRI, steps):
             raise SystemExit(f"GetFEM's Newton did not converge at level {n}")
         iters += int(nit)
         if n < steps:
-            u_nu = -md.variable("u")[uy]  # outward normal (0, -1)
+            u_nu = -md.variable("u")[uy]  # outward normal -e_dim
             w[cd] += k * alpha * cp * np.maximum(u_nu - w[cd], 0.0)
             md.set_variable("w", w)
-    return time.perf_counter() - t0, iters, xs[0, o1], w[cd], int(mfu.nbdof())
+    cpu = time.process_time() - c0
+    return time.perf_counter() - t0, cpu, iters, xs[:, o1].T, w[cd], int(mfu.nbdof())
 
 
 # a small run first: first-call set-up of the libraries is not compute time
 solve(np.ascontiguousarray(d["warm_points"].T),
       np.ascontiguousarray(d["warm_cells"].T.astype(np.int32)), 2)
-compute, iters, x_out, w_out, ndof = solve(P, TRI, steps)
+compute, cpu, iters, x_out, w_out, ndof = solve(P, TRI, steps)
 np.savez(out_file, x=x_out, w=w_out)
-print(json.dumps({"compute": compute, "iterations": iters, "dofs": ndof}))
+print(json.dumps({"compute": compute, "cpu": cpu, "iterations": iters, "dofs": ndof}))
 """
 
 _VEMWEAR_CHILD = r"""
@@ -187,6 +211,7 @@ import importlib, json, sys, time
 import numpy as np
 from vemwear.contact import LinearCompliance
 from vemwear.mesh import rectangle_triangles, tag_rectangle
+from vemwear.mesh.generate3d import box_tetrahedra, tag_box
 from vemwear.simulate import Problem, SolverOptions, TimeGrid, simulate
 from vemwear.solvers.backends import resolve_backend, schur_factorize
 from vemwear.vem import Material
@@ -204,16 +229,19 @@ for name in ("matplotlib.path", "multiprocessing", "scipy.sparse.csgraph",
 a = json.loads(sys.argv[1])
 
 
-def solve(nx, ny, steps):
-    t0 = time.perf_counter()
-    mesh = tag_rectangle(rectangle_triangles((2.0, 1.0), (nx, ny)))
+def solve(divisions, steps):
+    t0, c0 = time.perf_counter(), time.process_time()
+    if len(divisions) == 2:
+        mesh = tag_rectangle(rectangle_triangles((2.0, 1.0), divisions))
+    else:  # clamped at x = 0, contact at z = 0, traction-free elsewhere
+        mesh = tag_box(box_tetrahedra((2.0, 1.0, 1.0), divisions), a["sides"])
     pr = Problem(
         mesh, Material(a["lam"], a["eta"]), TimeGrid.uniform(a["T"], steps),
         f1=tuple(a["f1"]), p=LinearCompliance(a["cp"]), g=a["g"], mu=a["mu"],
         kappa=a["kappa"], v_star=tuple(a["v_star"]),
     )
     r = simulate(pr, SolverOptions("newton", backend=a["backend"]))
-    return time.perf_counter() - t0, pr, r
+    return time.perf_counter() - t0, time.process_time() - c0, pr, r
 
 
 # the run's linear algebra alone, on its matrix: assembly of K, factorization with the
@@ -227,17 +255,17 @@ def floor(pr, levels):
     return time.perf_counter() - t0
 
 
-solve(4, 2, 2)  # first-call set-up of the libraries is not compute time
-compute, pr, r = solve(a["nx"], a["ny"], a["steps"])
+solve(a["warm"], 2)  # first-call set-up of the libraries is not compute time
+compute, cpu, pr, r = solve(a["divisions"], a["steps"])
 mesh = pr.mesh
-np.savez(a["out"], x=r.contact_points[:, 0], w=r.wear[-1])
+np.savez(a["out"], x=r.contact_points, w=r.wear[-1])
 # where the compute time goes: before the time loop (mesh, problem, assembly, result
 # arrays), the factorization with its Schur block, the levels with the recovery of u
 tm = r.timings
 phases = {"before": compute - tm["total"], "setup": tm["setup"], "loop": tm["time_loop"]}
-print(json.dumps({"compute": compute, "floor": floor(pr, len(r.t)), "phases": phases,
+print(json.dumps({"compute": compute, "cpu": cpu, "floor": floor(pr, len(r.t)), "phases": phases,
                   "iterations": int(r.iterations.sum()),
-                  "dofs": 2 * len(mesh.points), "levels": len(r.t),
+                  "dofs": mesh.points.size, "levels": len(r.t),
                   "backend": resolve_backend(a["backend"])}))
 """
 
@@ -266,20 +294,38 @@ def _getfem_version() -> str:
     return f"python3-getfem {proc.stdout.strip()}" if proc.returncode == 0 else "unknown version"
 
 
-def _mesh_file(nx: int, ny: int, steps: int, path: str) -> None:
-    """Export vemwear's triangles mesh and the data for the GetFEM child."""
-    from vemwear.mesh import rectangle_triangles
+def divisions(n: int, dim: int) -> tuple[int, ...]:
+    """The grid of size ``n``: n x n/2 rectangles (2D), n x n/2 x n/2 hexahedra (3D)."""
+    return (n, n // 2) if dim == 2 else (n, n // 2, n // 2)
 
-    mesh = rectangle_triangles((2.0, 1.0), (nx, ny))
-    if not np.all(np.diff(mesh.cell_offsets) == 3):
-        raise SystemExit("the triangles generator gave a cell that is not a triangle")
-    warm = rectangle_triangles((2.0, 1.0), (4, 2))
+
+def _simplices(divs: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """vemwear's triangles (2D) or tetrahedra (3D) mesh: points and vertex lists."""
+    from vemwear.mesh import rectangle_triangles
+    from vemwear.mesh.generate3d import box_tetrahedra
+
+    if len(divs) == 2:
+        mesh = rectangle_triangles((2.0, 1.0), divs)
+        offsets, cells = mesh.cell_offsets, mesh.cell_vertices
+    else:
+        mesh3 = box_tetrahedra((2.0, 1.0, 1.0), divs)
+        mesh, offsets, cells = mesh3, mesh3.cell_vertex_offsets, mesh3.cell_vertex_ids
+    d = len(divs)
+    if not np.all(np.diff(offsets) == d + 1):
+        raise SystemExit("the mesh generator gave a cell that is not a simplex")
+    return mesh.points, cells.reshape(-1, d + 1)
+
+
+def _mesh_file(n: int, dim: int, steps: int, path: str) -> None:
+    """Export vemwear's mesh and the data for the GetFEM child."""
+    points, cells = _simplices(divisions(n, dim))
+    warm_points, warm_cells = _simplices(divisions(4, dim))
     np.savez(
         path,
-        points=mesh.points,
-        cells=mesh.cell_vertices.reshape(-1, 3),
-        warm_points=warm.points,
-        warm_cells=warm.cell_vertices.reshape(-1, 3),
+        points=points,
+        cells=cells,
+        warm_points=warm_points,
+        warm_cells=warm_cells,
         steps=steps,
         T=T_END,
         lam=LAM,
@@ -288,8 +334,8 @@ def _mesh_file(nx: int, ny: int, steps: int, path: str) -> None:
         g=G,
         mu=MU,
         kappa=KAPPA,
-        f1=np.array(F1),
-        v_star=np.array(V_STAR),
+        f1=np.array(F1[dim]),
+        v_star=np.array(V_STAR[dim]),
     )
 
 
@@ -305,14 +351,16 @@ def _run(cmd: list[str], env: dict[str, str]) -> tuple[dict, float]:
 
 
 def _agreement(vem_npz: str, gf_npz: str) -> tuple[float, float, float]:
-    """(max wear of vemwear, relative difference of max wear, max nodal diff / max wear)."""
+    """(max wear of vemwear, relative difference of max wear, max nodal diff / max wear).
+
+    vemwear's contact nodes (the clamped ones are not contact nodes) are found among
+    GetFEM's by their coordinates, which both codes take from the same mesh file."""
     a, b = np.load(vem_npz), np.load(gf_npz)
-    order = np.argsort(b["x"])
-    xb, wb = b["x"][order], b["w"][order]
-    idx = np.clip(np.searchsorted(xb, a["x"]), 0, len(xb) - 1)
-    near = np.where(np.abs(xb[idx - 1] - a["x"]) < np.abs(xb[idx] - a["x"]), idx - 1, idx)
-    if np.abs(xb[near] - a["x"]).max() > 1e-12:
+    at = {tuple(x): i for i, x in enumerate(np.round(b["x"], 12).tolist())}
+    near = np.array([at.get(tuple(x), -1) for x in np.round(a["x"], 12).tolist()])
+    if len(near) == 0 or (near < 0).any():
         raise SystemExit("the contact nodes of the two codes differ")
+    wb = b["w"]
     wmax = float(np.abs(a["w"]).max())
     rel_max = abs(float(wb.max()) - float(a["w"].max())) / wmax
     rel_nodal = float(np.abs(wb[near] - a["w"]).max()) / wmax
@@ -323,6 +371,31 @@ def _stats(v: list[float]) -> str:
     return f"{min(v):7.3f} {statistics.median(v):7.3f} {max(v):7.3f}"
 
 
+def _spec(n: int, dim: int, steps: int, backend: str, out: str) -> dict:
+    """The vemwear child's problem, as the GetFEM child reads it from the mesh file."""
+    return {
+        "divisions": divisions(n, dim),
+        "warm": divisions(4, dim),
+        "sides": SIDES,
+        "steps": steps,
+        "T": T_END,
+        "lam": LAM,
+        "eta": ETA,
+        "f1": F1[dim],
+        "cp": C_P,
+        "g": G,
+        "mu": MU,
+        "kappa": KAPPA,
+        "v_star": V_STAR[dim],
+        "backend": backend,
+        "out": out,
+    }
+
+
+def _label(n: int, dim: int) -> str:
+    return "x".join(str(k) for k in divisions(n, dim))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -331,9 +404,11 @@ def main(argv: list[str] | None = None) -> int:
         "--sizes",
         type=int,
         nargs="+",
-        default=[32, 64, 128, 256],
-        help="divisions in x (y gets half): 32 -> 32x16",
+        default=None,
+        help="divisions in x (y, and z in 3D, get half): 32 -> 32x16; "
+        "default 32 64 128 256 (2D), 8 16 24 (3D)",
     )
+    ap.add_argument("--3d", dest="dim3", action="store_true", help="tetrahedra of the box")
     ap.add_argument("--steps", type=int, default=64, help="uniform time steps at every size")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--backend", default="auto", help="vemwear's backend: auto, scipy, pardiso")
@@ -344,7 +419,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--threads", type=int, default=None, help="OMP/OPENBLAS/MKL threads")
     ap.add_argument("--getfem-python", default=None, help="interpreter that imports getfem")
+    ap.add_argument("--json", default=None, help="also write the table's numbers to this file")
     args = ap.parse_args(argv)
+    dim = 3 if args.dim3 else 2
+    sizes = args.sizes or ([8, 16, 24] if dim == 3 else [32, 64, 128, 256])
 
     py = getfem_python(args.getfem_python)
     if py is None:
@@ -362,44 +440,29 @@ def main(argv: list[str] | None = None) -> int:
         f"backend {args.backend}; GetFEM ({_getfem_version()}) via {py}, "
         f"lsolver {args.lsolver}; threads {threads}"
     )
-    print(
-        f"Example 5.2 set 1 on triangles, {args.steps} steps ({args.steps + 1} levels), "
-        f"interleaved x {args.repeat}"
-    )
-    cols = ("gf", "vem", "gf_whole", "vem_whole", "floor")
+    what = "Example 5.2 set 1 on triangles" if dim == 2 else "the 3D example on tetrahedra"
+    print(f"{what}, {args.steps} steps ({args.steps + 1} levels), interleaved x {args.repeat}")
+    cols = ("gf", "vem", "gf_whole", "vem_whole", "floor", "gf_cpu", "vem_cpu")
     with tempfile.TemporaryDirectory() as tmp:
         child = os.path.join(tmp, "getfem_child.py")
         with open(child, "w") as fh:
             fh.write(_GETFEM_CHILD)
-        times = {n: {c: [] for c in cols} for n in args.sizes}
-        phases: dict[int, dict[str, list[float]]] = {n: {} for n in args.sizes}
-        info: dict[int, dict] = {n: {"rel_max": 0.0, "rel_nodal": 0.0} for n in args.sizes}
-        for n in args.sizes:
-            _mesh_file(n, n // 2, args.steps, os.path.join(tmp, f"mesh{n}.npz"))
+        times = {n: {c: [] for c in cols} for n in sizes}
+        phases: dict[int, dict[str, list[float]]] = {n: {} for n in sizes}
+        info: dict[int, dict] = {n: {"rel_max": 0.0, "rel_nodal": 0.0} for n in sizes}
+        for n in sizes:
+            _mesh_file(n, dim, args.steps, os.path.join(tmp, f"mesh{n}.npz"))
         for _ in range(args.repeat):
-            for n in args.sizes:  # interleaved
+            for n in sizes:  # interleaved
                 mesh = os.path.join(tmp, f"mesh{n}.npz")
                 gf_out, vem_out = os.path.join(tmp, f"gf{n}.npz"), os.path.join(tmp, f"vem{n}.npz")
                 g, g_wall = _run([py, child, mesh, gf_out, args.lsolver], env)
-                spec = {
-                    "nx": n,
-                    "ny": n // 2,
-                    "steps": args.steps,
-                    "T": T_END,
-                    "lam": LAM,
-                    "eta": ETA,
-                    "f1": F1,
-                    "cp": C_P,
-                    "g": G,
-                    "mu": MU,
-                    "kappa": KAPPA,
-                    "v_star": V_STAR,
-                    "backend": args.backend,
-                    "out": vem_out,
-                }
+                spec = _spec(n, dim, args.steps, args.backend, vem_out)
                 v, v_wall = _run([sys.executable, "-c", _VEMWEAR_CHILD, json.dumps(spec)], env)
                 for c, val in zip(
-                    cols, (g["compute"], v["compute"], g_wall, v_wall, v["floor"]), strict=True
+                    cols,
+                    (g["compute"], v["compute"], g_wall, v_wall, v["floor"], g["cpu"], v["cpu"]),
+                    strict=True,
                 ):
                     times[n][c].append(val)
                 for k, val in v["phases"].items():
@@ -423,12 +486,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     print(head)
     print("-" * len(head))
-    for n in args.sizes:
+    for n in sizes:
         t, it = times[n], info[n]
         ratio = statistics.median(t["gf"]) / statistics.median(t["vem"])
         ratio_w = statistics.median(t["gf_whole"]) / statistics.median(t["vem_whole"])
+        it.update(ratio=ratio, gf=t["gf"], vem=t["vem"])
         print(
-            f"{f'{n}x{n // 2}':>8} {it['dofs']:>7} {it['levels']:>4} | {_stats(t['gf']):>23} |"
+            f"{_label(n, dim):>8} {it['dofs']:>7} {it['levels']:>4} | {_stats(t['gf']):>23} |"
             f" {_stats(t['vem']):>23} | {ratio:6.1f} | {statistics.median(t['floor']):7.4f}"
             f" {statistics.median(t['vem']) / statistics.median(t['floor']):5.2f} |"
             f" {_stats(t['gf_whole']):>23} |"
@@ -436,7 +500,7 @@ def main(argv: list[str] | None = None) -> int:
             f" {it['wmax']:9.6f} {it['rel_max']:8.1e} {it['rel_nodal']:8.1e}"
         )
     print(
-        "dofs: 2 x vertices (clamped included); Newton G/V: iterations of all levels; "
+        f"dofs: {dim} x vertices (clamped included); Newton G/V: iterations of all levels; "
         "dmax = |max w_G - max w_V| / max w_V, dnodal = max |w_G - w_V| / max w_V at T "
         "(largest over the repeats)"
     )
@@ -445,14 +509,29 @@ def main(argv: list[str] | None = None) -> int:
         "assembly, result arrays), the factorization with the Schur block "
         "(result.timings['setup']), the levels with the recovery of u (['time_loop'])"
     )
-    for n in args.sizes:
+    for n in sizes:
         ph = {k: 1e3 * statistics.median(v) for k, v in phases[n].items()}
         print(
-            f"{f'{n}x{n // 2}':>8}  before {ph['before']:8.2f}  set-up {ph['setup']:8.2f}"
+            f"{_label(n, dim):>8}  before {ph['before']:8.2f}  set-up {ph['setup']:8.2f}"
             f"  levels {ph['loop']:8.2f}  of {1e3 * statistics.median(times[n]['vem']):8.2f}"
         )
-    used = sorted({info[n]["backend"] for n in args.sizes})
+    print(
+        "CPU time of the compute (all threads of each child; on a loaded machine the wall "
+        "time waits for the cores, the CPU time does not), seconds: min med max"
+    )
+    for n in sizes:
+        t = times[n]
+        ratio_cpu = statistics.median(t["gf_cpu"]) / statistics.median(t["vem_cpu"])
+        info[n].update(ratio_cpu=ratio_cpu, gf_cpu=t["gf_cpu"], vem_cpu=t["vem_cpu"])
+        print(
+            f"{_label(n, dim):>8}  GetFEM {_stats(t['gf_cpu'])}  vemwear {_stats(t['vem_cpu'])}"
+            f"  ratio {ratio_cpu:6.1f}"
+        )
+    used = sorted({info[n]["backend"] for n in sizes})
     print(f"vemwear's backend: {', '.join(used)}; GetFEM's linear solver: {args.lsolver}")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({_label(n, dim): info[n] for n in sizes}, fh, indent=1)
     return 0
 
 

@@ -143,6 +143,26 @@ def test_pardiso_solves_whatever_mkl_threads_the_caller_sets(factor_threads, sol
 
 
 @needs_pardiso
+def test_auto_factorizes_small_matrices_on_one_mkl_thread(small_problem):
+    """Below SCHUR_SERIAL_MAX unknowns "auto" makes PARDISO's Schur factorization on one
+    MKL thread, keeps that count for its solves, leaves the caller's count as it was,
+    and gives the results of PARDISO on its threads to round-off."""
+    from vemwear.solvers.backends.pardiso import _thread_functions
+
+    get_threads = _thread_functions()[0]
+    s = small_problem.discrete.system
+    assert s.K.shape[0] < backends.SCHUR_SERIAL_MAX
+    before = get_threads()
+    f = schur_factorize(s.K, s.contact_dofs.ravel(), s.dof_points, "auto")
+    assert f.name == "pardiso" and f._h.threads == 1 and get_threads() == before
+    g = schur_factorize(s.K, s.contact_dofs.ravel(), s.dof_points, "pardiso")
+    assert g._h.threads == before
+    assert rel(f.S_inv, g.S_inv) <= 1e-12
+    b = np.random.default_rng(3).normal(size=(s.n_free, 3))
+    assert rel(f.solve(b), g.solve(b)) <= 1e-12 and rel(s.K @ f.solve(b), b) <= 1e-12
+
+
+@needs_pardiso
 def test_pardiso_rejects_a_matrix_that_is_not_spd(small_problem):
     s = small_problem.discrete.system
     with pytest.raises(RuntimeError, match="not positive definite"):

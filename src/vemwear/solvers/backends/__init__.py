@@ -8,7 +8,8 @@ scipy     SciPy's SuperLU, trailing block of the full LU factors      always
 petsc     MUMPS through PETSc, on the ranks of an MPI job (ICNTL(19))  ``petsc4py``
 ========  ==========================================================  ==============
 
-``"auto"`` picks the first installed backend of :data:`PREFERENCE`; ``"petsc"`` is
+``"auto"`` picks the first installed backend of :data:`PREFERENCE` (PARDISO's Schur
+factorization on one MKL thread below :data:`SCHUR_SERIAL_MAX` unknowns); ``"petsc"`` is
 only used when asked for (``mpirun -n N vemwear run ... --backend petsc``: docs/mpi.md),
 and only for the Schur factorization of the condensed scheme. A new backend
 (MUMPS through a binding that imports with the installed NumPy, for one; its Schur
@@ -45,6 +46,12 @@ ON_REQUEST = ("petsc",)
 #: Below this many unknowns SuperLU factorizes about as fast as PARDISO; the
 #: full-space Newton path (a new factorization per iteration) uses PARDISO above it.
 PARDISO_MIN_SIZE = 20_000
+
+#: Below this many unknowns the Schur factorization of ``"auto"`` runs PARDISO on one
+#: MKL thread: waking a second thread for each phase costs more than it gains (2.0 and
+#: 1.5 times faster at 1,088 and 4,224 unknowns, README.md "Against GetFEM"), and
+#: SuperLU was slower than both at every size measured.
+SCHUR_SERIAL_MAX = 20_000
 
 _MODULES = {"scipy": ".superlu", "pardiso": ".pardiso", "petsc": ".petsc"}
 _HINT = {
@@ -188,7 +195,8 @@ def schur_factorize(
     """Factorize SPD ``K`` once, with the block of ``K^{-1}`` on the dofs ``last``.
 
     With :func:`keep_factorizations` on, a factorization of the same matrix and dofs
-    made earlier in this process is returned instead.
+    made earlier in this process is returned instead. ``"auto"`` factorizes with
+    PARDISO on one MKL thread below :data:`SCHUR_SERIAL_MAX` unknowns.
 
     Parameters
     ----------
@@ -198,11 +206,12 @@ def schur_factorize(
     backend : a name of :data:`BACKENDS`
     """
     chosen = resolve_backend(backend)
-    key = _digest(K, last, points, backend=chosen) if _KEEP else b""
+    serial = chosen == "pardiso" and backend == "auto" and K.shape[0] < SCHUR_SERIAL_MAX
+    key = _digest(K, last, points, backend=chosen + " serial" * serial) if _KEEP else b""
     if key in _KEPT:
         _KEPT.move_to_end(key)
         return _KEPT[key]
-    with _failures(chosen):
+    with _failures(chosen), _one_mkl_thread(serial):
         if chosen == "pardiso":
             factor: SchurFactorization = _module("pardiso").PardisoSchur(K, last, points)
         elif chosen == "petsc":
@@ -214,6 +223,21 @@ def schur_factorize(
         while len(_KEPT) > _KEEP:
             _KEPT.popitem(last=False)
     return factor
+
+
+@contextmanager
+def _one_mkl_thread(on: bool) -> Iterator[None]:
+    """MKL on one thread for this thread while the enclosed factorization is made (its
+    handle keeps the count for every later solve)."""
+    if not on:
+        yield
+        return
+    set_local = _module("pardiso")._thread_functions()[1]
+    previous = set_local(1)
+    try:
+        yield
+    finally:
+        set_local(previous)
 
 
 @contextmanager
@@ -235,6 +259,7 @@ __all__ = [
     "ON_REQUEST",
     "PARDISO_MIN_SIZE",
     "PREFERENCE",
+    "SCHUR_SERIAL_MAX",
     "Factorization",
     "SchurFactorization",
     "available_backends",
