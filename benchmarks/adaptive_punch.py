@@ -42,13 +42,15 @@ from vemwear.simulate import Result, simulate, simulate_adaptive
 from vemwear.simulate.problem import Problem
 
 UNIFORM = (48, 96, 192)
-#: Adaptive settings: initial divisions, every, theta, max_cells, curved.
+#: Adaptive settings: initial divisions, every, theta, max_cells, curved, estimator,
+#: transfer.
 ADAPTIVE = [
-    ((48, 16), 4, 0.5, 8000, True),
-    ((48, 16), 4, 0.5, 8000, False),
-    ((48, 16), 2, 0.5, 8000, True),
-    ((96, 32), 4, 0.5, 8000, True),
-    ((96, 32), 4, 0.5, 8000, False),
+    ((48, 16), 4, 0.5, 8000, True, "residual", "linear"),
+    ((48, 16), 4, 0.5, 8000, False, "residual", "linear"),
+    ((48, 16), 4, 0.5, 8000, True, "wear", "cubic"),
+    ((48, 16), 4, 0.5, 8000, True, "residual", "cubic"),
+    ((48, 16), 4, 0.5, 8000, True, "wear", "linear"),
+    ((96, 32), 4, 0.5, 8000, True, "residual", "linear"),
 ]
 
 #: Meshes refined a priori along the arc: initial divisions, rounds, half-width in x.
@@ -92,12 +94,26 @@ def _band(div: tuple[int, int], rounds: int, width: float, where: Path) -> Case:
 
 
 def _adaptive(
-    div: tuple[int, int], every: int, theta: float, max_cells: int, curved: bool, where: Path
+    div: tuple[int, int],
+    every: int,
+    theta: float,
+    max_cells: int,
+    curved: bool,
+    estimator: str,
+    transfer: str,
+    where: Path,
 ) -> Case:
     def run() -> tuple[int, Result]:
         p = punch_problem(*div, where)
         segs = simulate_adaptive(
-            p, every=every, theta=theta, max_cells=max_cells, curved=curved, keep=True
+            p,
+            every=every,
+            theta=theta,
+            max_cells=max_cells,
+            curved=curved,
+            estimator=estimator,
+            transfer=transfer,
+            keep=True,
         )
         return segs[-1].problem.space.n_dofs, segs[-1].result
 
@@ -108,7 +124,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--reference", type=int, default=384, help="x divisions of the reference")
     ap.add_argument("--repeat", type=int, default=3, help="interleaved repeats")
-    ap.add_argument("--quick", action="store_true", help="the first two adaptive settings")
+    ap.add_argument("--quick", action="store_true", help="the first three adaptive settings")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp)
@@ -121,12 +137,13 @@ def main() -> None:
             cases[f"{div[0]} x {div[1]} refined {rounds} times along the arc, |x| <= {width}"] = (
                 _band(div, rounds, width, where)
             )
-        for div, every, theta, max_cells, curved in ADAPTIVE[: 2 if a.quick else None]:
+        for div, every, theta, max_cells, curved, est, tr in ADAPTIVE[: 3 if a.quick else None]:
             name = (
                 f"adaptive from {div[0]} x {div[1]}, every {every}, theta {theta}, "
-                f"max_cells {max_cells}, {'on the arc' if curved else 'on the chords'}"
+                f"max_cells {max_cells}, {'on the arc' if curved else 'on the chords'}, "
+                f"{est}, {tr}"
             )
-            cases[name] = _adaptive(div, every, theta, max_cells, curved, where)
+            cases[name] = _adaptive(div, every, theta, max_cells, curved, est, tr, where)
         times, found = measure(cases, a.repeat, wear_error(ref))
     print(table(times, found, f"uniform {UNIFORM[-1]} x {UNIFORM[-1] // 3}"))
 

@@ -26,10 +26,12 @@ __all__ = ["Adapt", "adapt_settings"]
 class Adapt(Section):
     """Adaptive meshes in time (docs/method.md section 11; k = 1 and 2, 2D)."""
 
-    estimator: Literal["residual"] = Field(
+    estimator: Literal["residual", "wear"] = Field(
         "residual",
-        description="the a posteriori estimator that marks the cells: 'residual' (the "
-        "residual estimator of docs/method.md section 11, k = 1 and 2 in 2D)",
+        description="what marks the cells: 'residual' (the residual estimator of "
+        "docs/method.md section 11, k = 1 and 2) or 'wear' (the error of the wear profile "
+        "predicted at the final time along Gamma_C, k = 1; a mesh change refines until it "
+        "has fallen as one uniform refinement would make it fall)",
     )
     every: int = Field(ge=1, description="time levels between mesh changes, >= 1")
     theta: float = Field(
@@ -69,6 +71,12 @@ class Adapt(Section):
         "initial mesh's boundary vertices (false: onto the chords); straight parts are "
         "not affected",
     )
+    transfer: Literal["linear", "cubic"] = Field(
+        "linear",
+        description="how the wear moves to a new mesh: 'linear' (the piecewise linear "
+        "function along Gamma_C) or 'cubic' (the monotone piecewise cubic through its "
+        "nodal values, k = 1); kept nodes keep their values either way",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -106,6 +114,16 @@ def adapt_settings(
             f"{src}: [adapt] the {a.estimator} estimator is implemented for k = 1 and 2; [vem] "
             f"order = {order} (remove [adapt] or use order = 1 or 2)"
         )
+    if order != 1 and a.estimator == "wear":
+        raise ConfigError(
+            f"{src}: [adapt] estimator = 'wear' is implemented for k = 1; [vem] order = "
+            f"{order} (use estimator = 'residual' or order = 1)"
+        )
+    if order != 1 and a.transfer == "cubic":
+        raise ConfigError(
+            f"{src}: [adapt] transfer = 'cubic' is implemented for k = 1 (k = 2 moves the "
+            f"wear as a piecewise quadratic); [vem] order = {order} (remove transfer)"
+        )
     if a.max_cells is not None and a.max_cells < n_cells:
         raise ConfigError(
             f"{src}: [adapt] max_cells = {a.max_cells} is below the initial mesh's {n_cells} cells"
@@ -126,6 +144,8 @@ def adapt_settings(
             max_level=a.max_level,
             max_difference=a.max_difference,
             curved=a.curved,
+            estimator=a.estimator,
+            transfer=a.transfer,
         )
 
 

@@ -38,6 +38,7 @@ def transfer_along_contact(
     points: ArrayLike,
     parts: Sequence[str] = ("contact",),
     off_chord: float = 0.0,
+    cubic: bool = False,
 ) -> NDArray[np.float64]:
     """The piecewise linear function of ``values`` along the contact edges of ``mesh``,
     at ``points`` (module docstring).
@@ -59,6 +60,9 @@ def transfer_along_contact(
         Accept a node up to this fraction of an old edge's length away from the edge
         (0: only nodes on the edges, within round-off; see
         :data:`~vemwear.mesh.curves.OFF_CHORD`).
+    cubic : bool
+        k = 1: the monotone piecewise cubic through the values (:func:`_node_slopes`)
+        instead of the piecewise linear function; kept nodes keep their values as well.
 
     Returns
     -------
@@ -105,9 +109,21 @@ def transfer_along_contact(
     t = s[rows, best]
     L = np.linalg.norm(B[e] - A[e], axis=1)
     if quadratic:  # the quadratic through the start, the midpoint and the end
+        if cubic:
+            raise ValueError("the cubic transfer is for k = 1 (vertex nodes only)")
         out = (1 - t) * (1 - 2 * t) * va[e] + 4 * t * (1 - t) * vm[e] + t * (2 * t - 1) * vb[e]
         at_m = np.abs(t - 0.5) * L <= tol  # an old midpoint, now a vertex: its value
         out[at_m] = vm[e[at_m]]
+    elif cubic:  # cubic Hermite on the edge with the nodes' monotone slopes
+        d = _node_slopes(mesh, E, va, vb)
+        da, db = d[E[e, 0]] * L, d[E[e, 1]] * L
+        t2, t3 = t * t, t * t * t
+        out = (
+            (2 * t3 - 3 * t2 + 1) * va[e]
+            + (t3 - 2 * t2 + t) * da
+            + (3 * t2 - 2 * t3) * vb[e]
+            + (t3 - t2) * db
+        )
     else:
         out = (1.0 - t) * va[e] + t * vb[e]
     # kept vertices: the old value itself, not a rounded interpolant
@@ -116,3 +132,27 @@ def transfer_along_contact(
     out[at_a] = va[e[at_a]]
     out[at_b] = vb[e[at_b]]
     return out
+
+
+def _node_slopes(
+    mesh: Mesh, E: NDArray[np.int64], va: NDArray[np.float64], vb: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The slope along Gamma_C at every vertex of the contact edges ``E`` (oriented along
+    the boundary, values ``va`` at their starts and ``vb`` at their ends) for a monotone
+    piecewise cubic (Fritsch and Carlson, as SciPy's PCHIP): zero where the slopes of the
+    two edges at a vertex differ in sign (a local extremum stays one, no overshoot), their
+    weighted harmonic mean otherwise; at an end of a chain of edges, the slope of its
+    edge."""
+    L = np.linalg.norm(mesh.points[E[:, 1]] - mesh.points[E[:, 0]], axis=1)
+    delta = (vb - va) / L
+    n = mesh.n_points
+    d_in, d_out = np.zeros(n), np.zeros(n)
+    h_in, h_out = np.zeros(n), np.zeros(n)
+    d_in[E[:, 1]], h_in[E[:, 1]] = delta, L
+    d_out[E[:, 0]], h_out[E[:, 0]] = delta, L
+    w1, w2 = 2 * h_out + h_in, h_out + 2 * h_in
+    same = d_in * d_out > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mean = (w1 + w2) / (w1 / d_in + w2 / d_out)
+    both = (h_in > 0) & (h_out > 0)
+    return np.where(both, np.where(same, mean, 0.0), d_in + d_out)

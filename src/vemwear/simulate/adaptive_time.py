@@ -43,6 +43,7 @@ from .options import SolverOptions
 from .problem import Problem
 from .stream import LoopState, StoragePlan
 from .timegrid import TimeGrid
+from .wear_estimate import predicted_wear, wear_indicators
 
 __all__ = ["AdaptSettings", "AdaptiveState", "Segment", "simulate_adaptive"]
 
@@ -99,6 +100,15 @@ class AdaptSettings:
     curved : bool
         Put the new vertices of curved boundary edges onto the curve of the initial
         mesh's boundary (:mod:`vemwear.mesh.curves`); straight edges are not affected.
+    estimator : {"residual", "wear"}
+        What marks the cells: the residual estimator (:mod:`.estimate`), or the error of
+        the wear profile predicted at the final time (:mod:`.wear_estimate`, k = 1), with
+        which a mesh change refines, round after round on the predicted profile, until
+        that error has fallen as one uniform refinement would make it fall.
+    transfer : {"linear", "cubic"}
+        How the wear moves to a new mesh (:func:`~vemwear.contact.transfer.
+        transfer_along_contact`): the piecewise linear function along Gamma_C, or the
+        monotone piecewise cubic through its nodal values (k = 1).
 
     Raises
     ------
@@ -114,6 +124,8 @@ class AdaptSettings:
     max_level: int | None = None
     max_difference: int = 1
     curved: bool = True
+    estimator: str = "residual"
+    transfer: str = "linear"
 
     def __post_init__(self) -> None:
         theta, coarsen = self.theta, self.coarsen
@@ -136,6 +148,10 @@ class AdaptSettings:
             raise ValueError(f"max_level must be >= 0, got {self.max_level}")
         if self.max_difference < 1:
             raise ValueError(f"max_difference must be at least 1, got {self.max_difference}")
+        if self.estimator not in ("residual", "wear"):
+            raise ValueError(f"estimator must be 'residual' or 'wear', got {self.estimator!r}")
+        if self.transfer not in ("linear", "cubic"):
+            raise ValueError(f"transfer must be 'linear' or 'cubic', got {self.transfer!r}")
 
 
 @dataclass(frozen=True)
@@ -179,6 +195,8 @@ def simulate_adaptive(
     max_level: int | None = None,
     max_difference: int = 1,
     curved: bool = True,
+    estimator: str = "residual",
+    transfer: str = "linear",
     solver: SolverOptions | str = "newton",
     start: AdaptiveState | None = None,
     on_segment: Callable[[Segment, AdaptiveState | None], None] | None = None,
@@ -207,6 +225,8 @@ def simulate_adaptive(
     curved : bool
         New boundary vertices of curved boundary parts go onto the curve through the
         initial mesh's boundary vertices (:class:`~vemwear.mesh.curves.BoundaryCurve`).
+    estimator, transfer : str
+        As in :class:`AdaptSettings`.
     solver : SolverOptions or str
         As for :func:`~vemwear.simulate.loop.simulate`.
     start : AdaptiveState, optional
@@ -226,8 +246,19 @@ def simulate_adaptive(
     if not isinstance(problem.mesh, Mesh) or problem.order not in (1, 2):
         raise ValueError("adaptive runs are implemented for k = 1 and 2 in 2D")
     cfg = AdaptSettings(
-        every, theta, coarsen, max_cells, target_error, max_level, max_difference, curved
+        every,
+        theta,
+        coarsen,
+        max_cells,
+        target_error,
+        max_level,
+        max_difference,
+        curved,
+        estimator,
+        transfer,
     )
+    if problem.order != 1 and (estimator, transfer) != ("residual", "linear"):
+        raise ValueError("estimator = 'wear' and transfer = 'cubic' are implemented for k = 1")
     opts = SolverOptions(method=solver) if isinstance(solver, str) else solver
     mesh: Mesh = problem.mesh
     tree = CellTree.initial(mesh.n_cells)
@@ -282,12 +313,20 @@ def _segments(
             if on_segment is not None:
                 on_segment(seg, None)
             return segments
-        new, tree = _change(mesh, tree, est, cfg, curve)
+        cubic = cfg.transfer == "cubic"
+        if cfg.estimator == "wear":
+            W = predicted_wear(
+                pr.discrete, res.wear[-1], res.p_soft[-1], res.p_rigid[-1], t[n1], t[N]
+            )
+            move = (parts, off_chord, cubic)
+            new, tree = _change_for_wear(mesh, tree, pr.contact.nodes, W, cfg, curve, move)
+        else:
+            new, tree = _change(mesh, tree, est.indicators, est.total, cfg, curve)
         w = res.wear[-1]
         if new is not mesh:
             nxt = dataclasses.replace(problem, mesh=new)
             w = transfer_along_contact(
-                mesh, pr.contact.nodes, w, nxt.contact.points, parts, off_chord
+                mesh, pr.contact.nodes, w, nxt.contact.points, parts, off_chord, cubic
             )
             forget()  # the old mesh's factorization, before the new one is made
         pr.discrete.release_solvers()
@@ -297,14 +336,19 @@ def _segments(
 
 
 def _change(
-    mesh: Mesh, tree: CellTree, est: Estimate, cfg: AdaptSettings, curve: BoundaryCurve | None
+    mesh: Mesh,
+    tree: CellTree,
+    eta2: NDArray[np.float64],
+    total: float,
+    cfg: AdaptSettings,
+    curve: BoundaryCurve | None,
 ) -> tuple[Mesh, CellTree]:
-    """Coarsen, then refine, once: the new mesh and its tree."""
-    eta2 = est.indicators
+    """Coarsen, then refine, once, by the indicators ``eta2`` (their estimate ``total``):
+    the new mesh and its tree."""
     refine = dorfler_marking(eta2, cfg.theta)
     if cfg.max_level is not None:
         refine = refine[tree.level[refine] < cfg.max_level]
-    if cfg.target_error is not None and est.total <= cfg.target_error:
+    if cfg.target_error is not None and total <= cfg.target_error:
         refine = refine[:0]  # accurate enough: coarsening only
     owner = np.arange(mesh.n_cells)
     if cfg.coarsen > 0:
@@ -315,3 +359,41 @@ def _change(
         if cfg.max_cells is None or new.n_cells <= cfg.max_cells:
             return new, tree2
     return mesh, tree
+
+
+#: Most refinement rounds of one mesh change by the wear indicator.
+WEAR_ROUNDS = 8
+
+
+def _change_for_wear(
+    mesh: Mesh,
+    tree: CellTree,
+    nodes: NDArray[np.int64],
+    W: NDArray[np.float64],
+    cfg: AdaptSettings,
+    curve: BoundaryCurve | None,
+    move: tuple[tuple[str, ...], float, bool],
+) -> tuple[Mesh, CellTree]:
+    """A mesh change by the wear indicator of the predicted profile ``W`` at the contact
+    ``nodes``: coarsen and refine once (:func:`_change`), then refine again, the profile
+    moved onto each new mesh (no solve), until its indicator is a sixteenth of the old
+    mesh's (what one uniform refinement gives a smooth profile, ``L^5`` per piece over
+    twice the pieces), :data:`WEAR_ROUNDS` rounds or ``max_cells``."""
+    parts, off_chord, cubic = move
+    eta2 = wear_indicators(mesh, nodes, W, parts)
+    goal = float(eta2.sum()) / 16.0
+    new, tree = _change(mesh, tree, eta2, float(np.sqrt(eta2.sum())), cfg, curve)
+    if cfg.target_error is not None and np.sqrt(eta2.sum()) <= cfg.target_error:
+        return new, tree
+    for _ in range(WEAR_ROUNDS - 1):
+        if new is mesh:  # nothing refined: marks at max_level, or max_cells reached
+            break
+        on = np.unique(np.concatenate([new.part_edges(p) for p in parts]))
+        W = transfer_along_contact(mesh, nodes, W, new.points[on], parts, off_chord, cubic)
+        mesh, nodes = new, on
+        eta2 = wear_indicators(mesh, nodes, W, parts)
+        if eta2.sum() <= goal:
+            break
+        cfg_refine = dataclasses.replace(cfg, coarsen=0.0)
+        new, tree = _change(mesh, tree, eta2, float(np.sqrt(eta2.sum())), cfg_refine, curve)
+    return new, tree

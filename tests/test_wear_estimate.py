@@ -1,0 +1,104 @@
+"""Adaptive runs for the wear (docs/method.md section 11): the indicator of the wear
+profile's interpolation error, the monotone cubic transfer of the wear, and runs marked
+by the wear that refine along Gamma_C only and start again bitwise."""
+
+from __future__ import annotations
+
+import tomllib
+
+import numpy as np
+import pytest
+
+from conftest import small_config
+from vemwear.config import parse_config
+from vemwear.config.errors import ConfigError
+from vemwear.contact.transfer import transfer_along_contact
+from vemwear.mesh import rectangle_squares, tag_rectangle
+from vemwear.mesh.refine import refine_cells
+from vemwear.paper import ex52
+from vemwear.simulate.adaptive_time import simulate_adaptive
+from vemwear.simulate.wear_estimate import wear_indicators
+
+
+def _strip(n: int = 8):
+    """n x 2 squares of (0, 1) x (0, 0.25), contact at the bottom (x from 0 to 1)."""
+    mesh = rectangle_squares((1.0, 0.25), (n, 2))
+    return tag_rectangle(mesh, {"clamped": "top", "free": ["left", "right"], "contact": "bottom"})
+
+
+def _bottom(mesh):
+    nodes = np.unique(mesh.part_edges("contact"))
+    return nodes, mesh.points[nodes, 0]
+
+
+def test_the_indicator_is_the_interpolation_error_of_a_smooth_profile() -> None:
+    mesh = _strip(8)
+    nodes, x = _bottom(mesh)
+    eta2 = wear_indicators(mesh, nodes, 3.0 * x * x, ("contact",))
+    L = 1 / 8
+    # the 6 inner pieces: L^5 (w'')^2 / 120 with w'' = 6; the two end pieces see one
+    # end without a second difference and carry nothing
+    rows = mesh.boundary_edge_cells[mesh.boundary_tags == mesh.part_code("contact")]
+    got = np.sort(eta2[rows])
+    assert np.allclose(got[2:], L**5 * 36 / 120, rtol=1e-12) and np.all(got[:2] == 0)
+    assert np.all(np.delete(eta2, rows) == 0)
+    # a kink (where a contact zone ends) weighs nothing by itself: linear on both sides
+    assert np.abs(wear_indicators(mesh, nodes, np.abs(x - 0.5), ("contact",))).max() < 1e-30
+
+
+def test_the_cubic_transfer_keeps_nodes_is_monotone_and_beats_the_linear_one() -> None:
+    mesh = _strip(8)
+    nodes, x = _bottom(mesh)
+    new = refine_cells(mesh, np.arange(mesh.n_cells))
+    new_nodes, xn = _bottom(new)
+    P = new.points[new_nodes]
+
+    def move(v, cubic):
+        return transfer_along_contact(mesh, nodes, v, P, ("contact",), cubic=cubic)
+
+    smooth = np.exp(2 * x)
+    old = dict(zip(x.tolist(), smooth, strict=True))
+    got = move(smooth, True)
+    kept = [i for i, xi in enumerate(xn.tolist()) if xi in old]
+    assert len(kept) == len(nodes) and all(got[i] == old[xn[i]] for i in kept)
+    inner = (xn > 1 / 8) & (xn < 7 / 8)  # the end pieces have one-sided slopes
+    err_cubic = np.abs(got - np.exp(2 * xn))[inner].max()
+    err_linear = np.abs(move(smooth, False) - np.exp(2 * xn))[inner].max()
+    assert err_cubic < err_linear / 4, (err_cubic, err_linear)
+    assert np.allclose(move(2 * x - 1, True), 2 * xn - 1, rtol=0, atol=1e-15)  # linear: exact
+    # monotone data stay within the values of their old edge (no overshoot at a kink)
+    ramp = np.clip((x - 0.4) * 5, 0, 1)
+    out = move(ramp, True)
+    assert out.min() >= 0 and out.max() <= 1 and np.all(np.diff(out[np.argsort(xn)]) >= 0)
+
+
+def test_a_run_marked_by_the_wear_refines_along_gamma_c_and_starts_again_bitwise() -> None:
+    pr = ex52.problem(0.2, 2.0, divisions=(16, 8), steps=8)
+    kw = {"every": 2, "max_cells": 600, "estimator": "wear", "transfer": "cubic"}
+    states = []
+    segs = simulate_adaptive(pr, on_segment=lambda s, st: states.append(st), **kw)
+    last = segs[-1]
+    mesh, level = last.problem.mesh, last.tree.level
+    assert mesh.n_cells > pr.mesh.n_cells and level.max() >= 2
+    # the cells refined twice or more are on Gamma_C, or its graded neighbours (y < 0.25)
+    centres = np.array([mesh.points[c].mean(axis=0) for c in mesh.cells])
+    assert np.all(centres[level >= 2, 1] < 0.25)
+    # more than one refinement round per mesh change: the second mesh is already graded
+    assert segs[1].tree.level.max() >= 2
+    again = simulate_adaptive(pr, start=states[1], **kw)
+    for a, b in zip(again, segs[2:], strict=True):
+        assert np.array_equal(a.result.wear, b.result.wear)
+        assert np.array_equal(a.problem.mesh.points, b.problem.mesh.points)
+
+
+@pytest.mark.parametrize(
+    ("adapt", "message"),
+    [
+        ('estimator = "wear"', "estimator = 'wear' is implemented for k = 1"),
+        ('transfer = "cubic"', "transfer = 'cubic' is implemented for k = 1"),
+    ],
+)
+def test_the_wear_settings_are_refused_for_k_2(adapt: str, message: str) -> None:
+    text = small_config("k2", vem={"order": 2}) + f"[adapt]\nevery = 2\nmax_cells = 99\n{adapt}\n"
+    with pytest.raises(ConfigError, match=message):
+        parse_config(tomllib.loads(text), source="case.toml")
