@@ -30,12 +30,13 @@ from vemwear.simulate import Result, SolverOptions, simulate, simulate_adaptive
 
 STEPS = 64
 UNIFORM = (64, 128, 256)
-#: Adaptive settings: initial divisions, every, theta, max_cells, max_level.
+#: Adaptive settings: initial divisions, every, theta, max_cells, max_level, estimator.
 ADAPTIVE = [
-    ((64, 32), 16, 0.4, 5000, None),
-    ((48, 24), 16, 0.5, 5000, None),
-    ((64, 32), 16, 0.5, 5000, None),
-    ((32, 16), 8, 0.5, 5000, None),
+    ((64, 32), 16, 0.4, 5000, None, "residual"),
+    ((48, 24), 16, 0.5, 5000, None, "residual"),
+    ((64, 32), 16, 0.5, 5000, None, "residual"),
+    ((32, 16), 8, 0.5, 5000, None, "residual"),
+    ((48, 24), 16, 0.5, 5000, None, "wear"),
 ]
 
 
@@ -48,11 +49,22 @@ def _uniform(n: int) -> Case:
 
 
 def _adaptive(
-    div: tuple[int, int], every: int, theta: float, max_cells: int, level: int | None
+    div: tuple[int, int], every: int, theta: float, max_cells: int, level: int | None, est: str
 ) -> Case:
+    # the wear estimator with the cubic transfer it is meant for (docs/method.md section 11)
+    transfer = "cubic" if est == "wear" else "linear"
+
     def run() -> tuple[int, Result]:
         p = ex52.problem(0.2, 2.0, divisions=div, steps=STEPS)
-        segs = simulate_adaptive(p, every=every, theta=theta, max_cells=max_cells, max_level=level)
+        segs = simulate_adaptive(
+            p,
+            every=every,
+            theta=theta,
+            max_cells=max_cells,
+            max_level=level,
+            estimator=est,
+            transfer=transfer,
+        )
         return segs[-1].problem.space.n_dofs, segs[-1].result
 
     return run
@@ -69,10 +81,11 @@ def main() -> None:
     ref = simulate(ex52.problem(0.2, 2.0, divisions=(n, n // 2), steps=STEPS), "newton")
     print(f"reference {n} x {n // 2}: {time.perf_counter() - t0:.1f} s")
     cases: dict[str, Case] = {f"uniform {m} x {m // 2}": _uniform(m) for m in UNIFORM}
-    for div, every, theta, max_cells, level in ADAPTIVE[: 2 if a.quick else None]:
+    for div, every, theta, max_cells, level, est in ADAPTIVE[: 2 if a.quick else None]:
         name = f"adaptive from {div[0]} x {div[1]}, every {every}, theta {theta}, max_cells {max_cells}"
-        cases[name + (f", max level {level}" if level is not None else "")] = _adaptive(
-            div, every, theta, max_cells, level
+        name += f", max level {level}" if level is not None else ""
+        cases[name + ("" if est == "residual" else f", {est}")] = _adaptive(
+            div, every, theta, max_cells, level, est
         )
     times, found = measure(cases, a.repeat, wear_error(ref))
     base = f"uniform {UNIFORM[-1]} x {UNIFORM[-1] // 2}"
