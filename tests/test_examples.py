@@ -256,6 +256,7 @@ PINNED: dict[str, tuple[str, float, float]] = {
     "plot_hertz.py": ("a_error", -0.00374499417180, 1e-4),
     "plot_ball_on_flat.py": ("scar_width", 0.887092314349, 1e-6),
     "plot_adaptive_moving.py": ("max_wear", 0.0356442832, 1e-6),
+    "plot_punch_adaptive.py": ("max_wear", 0.00892143409, 1e-6),
 }
 
 
