@@ -322,3 +322,30 @@ def test_the_progress_bar_counts_the_levels_of_every_mesh(tmp_path: Path, capsys
     assert re.search(r"\d+ cells", err)
     run_config(config, tmp_path / "quiet", progress=False)
     assert "time levels" not in capsys.readouterr().err
+
+
+def test_resume_takes_a_checkpoint_written_before_the_wear_settings(tmp_path: Path) -> None:
+    """A checkpoint without ``estimator`` and ``transfer`` (written before they existed) is
+    one of the residual estimator and the linear transfer: resumed with those, refused
+    with others."""
+    config = _config(tmp_path, steps=KILL_STEPS)
+    out = tmp_path / "out"
+    proc = run_until_segments(_cli(config, out), out, 1)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    path = out / "checkpoint.npz"
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    meta = json.loads(str(arrays["meta"]))
+    assert meta["adapt"]["estimator"] == "residual" and meta["adapt"]["transfer"] == "linear"
+    del meta["adapt"]["estimator"], meta["adapt"]["transfer"]
+    arrays["meta"] = np.array(json.dumps(meta))
+    with path.open("wb") as fh:
+        np.savez(fh, **arrays)
+    text = config.read_text()
+    config.write_text(text.replace("[adapt]\n", '[adapt]\ntransfer = "cubic"\n'))
+    with pytest.raises(ResumeError, match=r"--resume refused: .* other \[adapt\] settings"):
+        run_config(config, out, resume=True, progress=False)
+    config.write_text(text)
+    outcome = run_config(config, out, resume=True, progress=False)
+    assert outcome.segments is not None and (out / "result.h5").is_file()

@@ -274,6 +274,16 @@ def prepare_run(
     return plan
 
 
+#: ``[adapt]`` settings added after checkpoints of adaptive runs were first written, with
+#: the value that does what a run made before they existed did
+_ADAPT_SINCE = {"estimator": "residual", "transfer": "linear"}
+
+
+def _adapt_settings(stored: dict[str, Any] | None) -> dict[str, Any] | None:
+    """The ``[adapt]`` settings of a checkpoint, with those it predates at their value."""
+    return None if stored is None else {**_ADAPT_SINCE, **stored}
+
+
 def _load_checkpoint(
     outdir: Path, meta: dict[str, Any]
 ) -> tuple[LoopState | AdaptiveState, dict[str, Any]]:
@@ -290,7 +300,7 @@ def _load_checkpoint(
             state, stored = read_checkpoint(outdir)
     except ValueError as exc:
         raise ResumeError(f"--resume: {exc}") from None
-    if stored.get("adapt") != meta.get("adapt"):
+    if _adapt_settings(stored.get("adapt")) != meta.get("adapt"):
         raise ResumeError(
             f"--resume refused: {outdir} was computed with other [adapt] settings (or without "
             "[adapt]); restore them, or start over with --force"
