@@ -9,7 +9,8 @@ Algorithm
    Inside the box no mirror is closer than the seed it mirrors, so the Voronoi cell of a
    seed among seeds and mirrors is its cell clipped to the box, the sides cut by the
    bisectors of the seed and its mirrors. Only seeds within 1.5 cell sizes of a side
-   are mirrored; if then a cell is unbounded or leaves the box, all seeds are mirrored.
+   are mirrored (3 before the first Lloyd iteration); if then a cell is unbounded or
+   leaves the box, those within 3, and then all seeds.
 3. The diagram is read off the Delaunay tetrahedra of seeds and mirrors
    (:class:`scipy.spatial.Delaunay`, Qhull): its vertices are the circumcentres of the
    Delaunay facets (one per facet of cospherical points, which Qhull cuts into
@@ -188,9 +189,14 @@ def _diagram(
     return P, foff, fv, coff, faces[order], signs[order]
 
 
-def _clipped(seeds: FloatArray, lo: FloatArray, hi: FloatArray, h: float):
-    out = _diagram(seeds, lo, hi, 1.5 * h)
-    return out if out is not None else _diagram(seeds, lo, hi, np.inf)
+def _clipped(seeds: FloatArray, lo: FloatArray, hi: FloatArray, h: float, first: bool = False):
+    # wider layers of mirrors cost more Delaunay work; the seeds before Lloyd's first
+    # step, less even, often need more than 1.5 h
+    for layer in (3.0 * h,) if first else (1.5 * h, 3.0 * h):
+        out = _diagram(seeds, lo, hi, layer)
+        if out is not None:
+            return out
+    return _diagram(seeds, lo, hi, np.inf)
 
 
 def _merge(
@@ -292,8 +298,8 @@ def box_voronoi(
     if n < 2:  # Qhull needs points in general position: one cell is the box
         raise ValueError("box_voronoi needs at least 2 cells (one cell: use box_hexahedra)")
     h = float(np.prod(ext) / n) ** (1 / 3)
-    for _ in range(int(lloyd_iterations)):
-        P, foff, fv, coff, cf, cs = _clipped(X, lo, hi, h)
+    for i in range(int(lloyd_iterations)):
+        P, foff, fv, coff, cf, cs = _clipped(X, lo, hi, h, first=i == 0)
         ent = np.repeat(np.arange(n), np.diff(coff))
         _, X = cell_geometry(P, foff, fv, ent, cf, cs, n)
     P, foff, fv, coff, cf, cs = _clipped(X, lo, hi, h)
