@@ -286,7 +286,7 @@ def _run_config(
         )
         caution(f"warning: {outcome.warnings[-1]}")
     check_stop()  # safe points between the phases of the set-up
-    t1 = time.perf_counter()
+    t1, before = time.perf_counter(), _phases_done(cfg)
     est = estimate_config(cfg)
     if not force_size:
         check_estimate(est, out, str(config), have=have)
@@ -317,8 +317,7 @@ def _run_config(
                 caution(f"warning: {w}")
         tell(f"{cfg.title}: " + ", ".join(f"{k} {v}" for k, v in est.rows()))
         # the plan: this block but the assembly, set-up and estimate (their own phases)
-        d = cfg.problem.__dict__.get("discrete")
-        spent = sum(d.timings.values()) if d is not None else 0.0
+        spent = _phases_done(cfg) - before
         phases["plan"] = max(time.perf_counter() - t1 - spent, 0.0)
         check_stop()
     except BaseException:
@@ -344,6 +343,13 @@ def _run_config(
             outcome.resumed_from = int(plan.state.completed)
     outcome.seconds = time.perf_counter() - t0
     return outcome
+
+
+def _phases_done(cfg: Any) -> float:
+    """Seconds of the phases that the discretization timed itself (assembly, set-up,
+    estimate) and not yet handed to a run; 0 before it exists."""
+    d = cfg.problem.__dict__.get("discrete")
+    return float(sum(d.timings.values())) if d is not None else 0.0
 
 
 def overshoot_lines(cfg: Any) -> list[str]:
