@@ -29,7 +29,7 @@ from vemwear.mesh.io3d import read_mesh3d, write_mesh3d
 from vemwear.mesh.polyhedra import Mesh3D
 from vemwear.mesh.quality3d import quality_report3d
 from vemwear.mesh.registry3d import FAMILIES_3D, family3d, generate_mesh3d
-from vemwear.mesh.voronoi3d import box_voronoi
+from vemwear.mesh.voronoi3d import box_voronoi, halton
 
 SIZE = (2.0, 1.0, 1.0)
 
@@ -153,6 +153,37 @@ def test_voronoi_deterministic_and_from_seeds() -> None:
     assert m.n_faces == 11  # 2 x 5 sides and the middle face
     with pytest.raises(ValueError, match="strictly inside"):
         box_voronoi(SIZE, seeds=[[0.0, 0.5, 0.5], [1.0, 0.5, 0.5]])
+
+
+@pytest.mark.parametrize("n, seed", [(60, 4), (400, 0)])
+def test_voronoi_cells_are_the_voronoi_cells_of_their_seeds(n: int, seed: int) -> None:
+    """Without Lloyd iterations, every vertex of cell k is as close to seed k as to any
+    other seed (its nearest seeds, by a k-d tree); every interior face lies on the
+    bisector of its two cells' seeds; the cells fill the box."""
+    from scipy.spatial import cKDTree
+
+    seeds = np.clip(np.asarray(SIZE) * halton(n, 3, seed), 1e-6, np.asarray(SIZE) - 1e-6)
+    m = box_voronoi(SIZE, seeds=seeds, lloyd_iterations=0)
+    check_mesh3d(m)
+    h = (np.prod(SIZE) / n) ** (1 / 3)
+    nearest, _ = cKDTree(seeds).query(m.points)
+    cell = np.repeat(np.arange(n), np.diff(m.cell_vertex_offsets))
+    own = np.linalg.norm(m.points[m.cell_vertex_ids] - seeds[cell], axis=1)
+    np.testing.assert_allclose(own, nearest[m.cell_vertex_ids], atol=1e-12 * h)
+    uses = np.bincount(m.cell_faces, minlength=m.n_faces)
+    inner = np.flatnonzero(uses == 2)
+    a = np.full(m.n_faces, -1)
+    b = np.full(m.n_faces, -1)
+    pos = m.cell_face_signs > 0
+    a[m.cell_faces[pos]] = m.cell_of_entry[pos]
+    b[m.cell_faces[~pos]] = m.cell_of_entry[~pos]
+    owner = np.repeat(np.arange(m.n_faces), m.face_sizes)
+    x = m.points[m.face_vertices]
+    da = np.linalg.norm(x - seeds[a[owner]], axis=1)
+    db = np.linalg.norm(x - seeds[b[owner]], axis=1)
+    on = np.isin(owner, inner)
+    np.testing.assert_allclose(da[on], db[on], atol=1e-12 * h)
+    assert m.cell_volumes.sum() == pytest.approx(np.prod(SIZE), rel=1e-12)
 
 
 # ----------------------------------------------------------------------------- checks

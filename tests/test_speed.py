@@ -5,6 +5,7 @@ low-rank form, and the imports of the run path."""
 from __future__ import annotations
 
 import json
+import time
 import tomllib
 from pathlib import Path
 
@@ -72,6 +73,29 @@ def test_summary_timings_name_every_phase(tmp_path: Path, capsys) -> None:
     assert {"assembly", "setup", "smallness", "time_loop", "total"} <= set(tm)
     # 40 polyhedra take milliseconds to assemble; looking the matrix up takes microseconds
     assert tm["assembly"] > 1e-3
+    assert tm["total"] == pytest.approx(tm["assembly"] + tm["setup"] + tm["time_loop"])
+
+
+#: The phases of a run in ``summary.json``: each second of the run in one of them.
+PHASES = ("config", "plan", "assembly", "setup", "smallness", "time_loop", "outputs")
+
+
+def test_summary_timings_add_up_to_the_wall_time(tmp_path: Path) -> None:
+    """The phases of a 3D run (the configuration with its mesh, the plan, assembly,
+    set-up, estimate, levels, outputs with figures and ParaView files) add up to the
+    wall time of ``run_config``, and ``run`` is that wall time up to the last file."""
+    from vemwear import run_config
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(VORONOI_3D.replace("[output]", "[output]\nfigures = true\nvtk = true"))
+    tick = time.perf_counter()
+    outcome = run_config(cfg, tmp_path / "out", progress=False)
+    wall = time.perf_counter() - tick
+    tm = json.loads((tmp_path / "out" / "summary.json").read_text())["timings"]
+    assert tm == pytest.approx(outcome.result.timings, rel=1e-12)
+    assert all(tm[k] > 0.0 for k in PHASES)
+    assert 0.5 * wall <= sum(tm[k] for k in PHASES) <= 1.05 * wall
+    assert sum(tm[k] for k in PHASES) <= tm["run"] <= wall
     assert tm["total"] == pytest.approx(tm["assembly"] + tm["setup"] + tm["time_loop"])
 
 

@@ -24,6 +24,7 @@ from ..util.arrays import unique as _unique
 
 __all__ = [
     "cell_geometry",
+    "cross_rows",
     "face_geometry",
     "face_planarity",
     "group_max_distance",
@@ -69,6 +70,15 @@ def reverse_loops(offsets: IntArray, values: IntArray, flip: NDArray[np.bool_]) 
     return values[src]
 
 
+def cross_rows(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Row-wise cross products of (m, 3) arrays: the products and differences of
+    :func:`numpy.cross`, without its broadcasting and copies."""
+    out = np.empty((len(a), 3))
+    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        np.subtract(a[:, j] * b[:, k], a[:, k] * b[:, j], out=out[:, i])
+    return out
+
+
 def _segment_sum(values: NDArray, owner: IntArray, n: int) -> NDArray:
     """Sums of the rows of ``values`` (m,) or (m, k) per owner ``0..n-1``."""
     if values.ndim == 1:
@@ -106,7 +116,7 @@ def face_geometry(
     c = _segment_sum(X, owner, nf) / np.maximum(sizes, 1)[:, None]
     a = X - c[owner]
     b = points[vertices[loop_next(offsets)]] - c[owner]
-    tri = 0.5 * np.cross(a, b)  # area vectors of the fan triangles
+    tri = 0.5 * cross_rows(a, b)  # area vectors of the fan triangles
     A = _segment_sum(tri, owner, nf)
     norm = np.linalg.norm(A, axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -163,7 +173,7 @@ def cell_geometry(
     f, cell = entry_faces[e], entry_cells[e]
     base = c[f] - xk[cell]
     p, q = points[face_vertices[k]] - xk[cell], points[face_vertices[nxt]] - xk[cell]
-    vol = sign[e] * np.einsum("ij,ij->i", base, np.cross(p - base, q - base)) / 6.0
+    vol = sign[e] * np.einsum("ij,ij->i", base, cross_rows(p - base, q - base)) / 6.0
     V = np.bincount(cell, weights=vol, minlength=n_cells).astype(np.float64)
     m = _segment_sum(vol[:, None] * (base + p + q) / 4.0, cell, n_cells)
     with np.errstate(divide="ignore", invalid="ignore"):

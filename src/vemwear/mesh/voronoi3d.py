@@ -8,13 +8,21 @@ Algorithm
 2. Clipping by mirrors: the seeds near each of the six sides are mirrored across it.
    Inside the box no mirror is closer than the seed it mirrors, so the Voronoi cell of a
    seed among seeds and mirrors is its cell clipped to the box, the sides cut by the
-   bisectors of the seed and its mirrors. Only seeds within a few cell sizes of a side
-   are mirrored; if then a cell is unbounded or leaves the box, all seeds are mirrored.
-3. Faces are the ridges of :class:`scipy.spatial.Voronoi` between two seeds (stored once,
-   oriented from the lower seed to the higher, sign +1 in the first cell and -1 in the
-   second) or between a seed and its own mirror (a boundary face); ridges between a seed
-   and another seed's mirror have no area and are dropped. Every loop is ordered by the
-   angle of its vertices around the vertex average, counter-clockwise about the normal.
+   bisectors of the seed and its mirrors. Only seeds within 1.5 cell sizes of a side
+   are mirrored (3 before the first Lloyd iteration); if then a cell is unbounded or
+   leaves the box, those within 3, and then all seeds.
+3. The diagram is read off the Delaunay tetrahedra of seeds and mirrors
+   (:class:`scipy.spatial.Delaunay`, Qhull): its vertices are the circumcentres of the
+   Delaunay facets (one per facet of cospherical points, which Qhull cuts into
+   tetrahedra), the face between two points the ring of circumcentres around their
+   Delaunay edge. Faces are those between two seeds (stored once, oriented from the
+   lower seed to the higher, sign +1 in the first cell and -1 in the second) or between
+   a seed and its own mirror (a boundary face), numbered by their pair of seeds; faces
+   between a seed and another seed's mirror have no area and are dropped. Every loop is
+   ordered by the angle of its vertices around the vertex average, counter-clockwise
+   about the normal. All of this is array work over all edges at once, which makes the
+   mesher a small multiple of Qhull's own time (:class:`scipy.spatial.Voronoi` builds
+   Python lists of every ridge, as long again as its Qhull call).
 4. Lloyd iterations move every seed to the centroid of its cell
    (:func:`~vemwear.mesh.geometry3d.cell_geometry`).
 5. Vertices closer than ``collapse_tol`` times the cell size are merged (the degenerate
@@ -25,14 +33,13 @@ Algorithm
 
 from __future__ import annotations
 
-from itertools import chain
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..util.arrays import isin as _isin
 from ..util.arrays import unique as _unique
 from .generate3d import tag_box
-from .geometry3d import cell_geometry, face_geometry, loop_next, loop_owner, take_loops
+from .geometry3d import cell_geometry, cross_rows, loop_next, loop_owner, take_loops
 from .polyhedra import Mesh3D
 from .polymesh import MeshError
 
@@ -57,14 +64,60 @@ def halton(n: int, dim: int = 3, seed: int | None = 0) -> FloatArray:
     return np.asarray((out + shift) % 1.0)
 
 
+#: The six edges of a tetrahedron, as pairs of its vertex slots.
+_TET_EDGES = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]])
+
+
+def _centres(
+    allp: FloatArray, simplices: IntArray, neighbors: IntArray, equations: FloatArray
+) -> tuple[FloatArray, IntArray]:
+    """The Voronoi vertices: the circumcentres of the Delaunay facets, and the facet of
+    every tetrahedron.
+
+    Qhull triangulates a facet of five or more cospherical points (the mirrors make
+    many) into neighbouring tetrahedra with the facet's hyperplane, some of them flat;
+    the facet's vertex is the circumcentre of its largest tetrahedron. Facets are
+    numbered in the order of their first tetrahedron.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    nt = len(simplices)
+    A = allp[simplices[:, 0]]
+    u, v, w = (allp[simplices[:, j]] - A for j in (1, 2, 3))
+    vw = cross_rows(v, w)
+    det = np.einsum("ij,ij->i", u, vw)
+    t, j = np.nonzero(neighbors > np.arange(nt)[:, None])  # each pair once
+    nb = neighbors[t, j]
+    same = np.all(equations[t] == equations[nb], axis=1)
+    g = coo_matrix((np.ones(int(same.sum())), (t[same], nb[same])), shape=(nt, nt))
+    _, facet = connected_components(g, directed=False)  # numbered by first tetrahedron
+    facet = facet.astype(np.int64)
+    order = np.lexsort((-np.abs(det), facet))  # per facet, the largest tetrahedron first
+    first = np.ones(nt, dtype=bool)
+    first[1:] = facet[order[1:]] != facet[order[:-1]]
+    best = order[first]
+    A, u, v, w, vw, det = A[best], u[best], v[best], w[best], vw[best], det[best]
+    num = (
+        np.einsum("ij,ij->i", u, u)[:, None] * vw
+        + np.einsum("ij,ij->i", v, v)[:, None] * cross_rows(w, u)
+        + np.einsum("ij,ij->i", w, w)[:, None] * cross_rows(u, v)
+    )
+    return np.asarray(A + num / (2.0 * det)[:, None]), facet
+
+
 def _diagram(
     seeds: FloatArray, lo: FloatArray, hi: FloatArray, layer: float
 ) -> tuple[FloatArray, IntArray, IntArray, IntArray, IntArray, NDArray[np.int8]] | None:
     """Clipped Voronoi cells: points, face CSR and the (cell, face, sign) entries.
 
-    None if a cell of a seed is unbounded or leaves the box (too few mirrors).
+    The Voronoi diagram is read off the Delaunay tetrahedra of the seeds and mirrors:
+    its vertices are their circumcentres, the face between seeds ``a < b`` is the ring
+    of circumcentres of the tetrahedra around the Delaunay edge ``(a, b)``; faces are
+    numbered by ``(a, b)``. None if a cell of a seed is unbounded (an edge on the
+    convex hull) or leaves the box (too few mirrors).
     """
-    from scipy.spatial import Voronoi
+    from scipy.spatial import Delaunay
 
     n = len(seeds)
     pts, src = [seeds], [np.arange(n)]
@@ -76,41 +129,57 @@ def _diagram(
             pts.append(m)
             src.append(near)
     allp, origin = np.vstack(pts), np.concatenate(src)
-    vor = Voronoi(allp)
-    rp = vor.ridge_points
-    a, b = np.minimum(rp[:, 0], rp[:, 1]), np.maximum(rp[:, 0], rp[:, 1])
+    N = len(allp)
+    tri = Delaunay(allp, qhull_options="Qbb Qc Qz Q12")
+    S = np.asarray(tri.simplices, dtype=np.int64)
+    E = S[:, _TET_EDGES]  # (n_tets, 6, 2)
+    a = np.minimum(E[..., 0], E[..., 1]).ravel()
+    b = np.maximum(E[..., 0], E[..., 1]).ravel()
     inner = b < n
-    bound = (a < n) & (b >= n) & (origin[b] == a)
-    keep = np.flatnonzero(inner | bound)
-    sizes = np.fromiter(map(len, vor.ridge_vertices), dtype=np.int64, count=len(rp))
-    flat = np.fromiter(chain.from_iterable(vor.ridge_vertices), dtype=np.int64)
-    roff = np.zeros(len(rp) + 1, dtype=np.int64)
-    np.cumsum(sizes, out=roff[1:])
-    foff, fv = take_loops(roff, flat, keep)
-    if np.any(fv < 0):
+    sel = np.flatnonzero(inner | ((a < n) & (b >= n) & (origin[b] == a)))
+    P, facet = _centres(allp, S, np.asarray(tri.neighbors), np.asarray(tri.equations))
+    # the ring of an edge, each facet once (its tetrahedra share its one vertex): a
+    # single sort of (edge, facet) keys, whose edges come out in order
+    nP = len(P)
+    key, vid = a[sel] * N + b[sel], facet[sel // 6]
+    if float(N) * N * nP < 2.0**62:
+        key, vid = np.divmod(_unique(key * nP + vid), nP)
+    else:  # the combined key would overflow
+        o = np.lexsort((vid, key))
+        key, vid = key[o], vid[o]
+        keep = np.ones(len(key), dtype=bool)
+        keep[1:] = (key[1:] != key[:-1]) | (vid[1:] != vid[:-1])
+        key, vid = key[keep], vid[keep]
+    new = np.ones(len(key), dtype=bool)
+    new[1:] = key[1:] != key[:-1]
+    foff = np.append(np.flatnonzero(new), len(key)).astype(np.int64)
+    fa, fb = np.divmod(key[new], N)
+    H = np.asarray(tri.convex_hull, dtype=np.int64)
+    hull = np.concatenate([np.sort(H[:, p], axis=1) for p in ([0, 1], [0, 2], [1, 2])])
+    if np.any(_isin(key[new], hull[:, 0] * N + hull[:, 1])):
         return None
     tol = 1e-9 * float(np.max(hi - lo))
-    P = vor.vertices
-    used = _unique(fv)
+    used = _unique(vid)
     if np.any(P[used] < lo - tol) or np.any(P[used] > hi + tol):
         return None
     remap = np.full(len(P), -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
-    P, fv = P[used], remap[fv]
+    P, fv = P[used], remap[vid]
     # order every loop counter-clockwise about the direction from seed a to seed b
-    normal = allp[b[keep]] - allp[a[keep]]
+    normal = allp[fb] - allp[fa]
     normal /= np.linalg.norm(normal, axis=1)[:, None]
     axis = np.eye(3)[np.argmin(np.abs(normal), axis=1)]
-    u = np.cross(normal, axis)
+    u = cross_rows(normal, axis)
     u /= np.linalg.norm(u, axis=1)[:, None]
-    w = np.cross(normal, u)
+    w = cross_rows(normal, u)
     owner = loop_owner(foff)
-    _A, _c, avg = face_geometry(P, foff, fv)
+    tot = np.stack([np.bincount(owner, weights=P[fv, d], minlength=len(fa)) for d in range(3)], 1)
+    avg = tot / np.diff(foff)[:, None]  # the vertex average of every loop
     r = P[fv] - avg[owner]
     angle = np.arctan2(np.einsum("ij,ij->i", r, w[owner]), np.einsum("ij,ij->i", r, u[owner]))
     fv = fv[np.lexsort((angle, owner))]
-    fa, fb, inside = a[keep], b[keep], inner[keep]
-    nf = len(keep)
+    inside = fb < n
+    nf = len(fa)
     cells = np.concatenate([fa, fb[inside]])
     faces = np.concatenate([np.arange(nf), np.flatnonzero(inside)])
     signs = np.concatenate([np.ones(nf, np.int8), -np.ones(int(inside.sum()), np.int8)])
@@ -120,9 +189,14 @@ def _diagram(
     return P, foff, fv, coff, faces[order], signs[order]
 
 
-def _clipped(seeds: FloatArray, lo: FloatArray, hi: FloatArray, h: float):
-    out = _diagram(seeds, lo, hi, 3.0 * h)
-    return out if out is not None else _diagram(seeds, lo, hi, np.inf)
+def _clipped(seeds: FloatArray, lo: FloatArray, hi: FloatArray, h: float, first: bool = False):
+    # wider layers of mirrors cost more Delaunay work; the seeds before Lloyd's first
+    # step, less even, often need more than 1.5 h
+    for layer in (3.0 * h,) if first else (1.5 * h, 3.0 * h):
+        out = _diagram(seeds, lo, hi, layer)
+        if out is not None:
+            return out
+    return _diagram(seeds, lo, hi, np.inf)
 
 
 def _merge(
@@ -224,8 +298,8 @@ def box_voronoi(
     if n < 2:  # Qhull needs points in general position: one cell is the box
         raise ValueError("box_voronoi needs at least 2 cells (one cell: use box_hexahedra)")
     h = float(np.prod(ext) / n) ** (1 / 3)
-    for _ in range(int(lloyd_iterations)):
-        P, foff, fv, coff, cf, cs = _clipped(X, lo, hi, h)
+    for i in range(int(lloyd_iterations)):
+        P, foff, fv, coff, cf, cs = _clipped(X, lo, hi, h, first=i == 0)
         ent = np.repeat(np.arange(n), np.diff(coff))
         _, X = cell_geometry(P, foff, fv, ent, cf, cs, n)
     P, foff, fv, coff, cf, cs = _clipped(X, lo, hi, h)

@@ -246,6 +246,7 @@ def _run_config(
     warn: Callable[[str], None] | None,
 ) -> RunOutcome:
     """:func:`run_config` on one process (rank 0 of an MPI job)."""
+    t0 = time.perf_counter()  # the modules of a run are imported in its config phase
     from ..config import load_config
     from .describe import smallness_report
     from .outdir import refuse_locked, stale_temporaries
@@ -253,7 +254,6 @@ def _run_config(
     from .run import ResumeError, RunComplete, abandon_run, execute_run, prepare_run
     from .signals import check_stop
 
-    t0 = time.perf_counter()
     tell = say or (lambda line: None)
     caution = warn or (lambda line: None)
     out = Path(outdir).expanduser()
@@ -261,6 +261,9 @@ def _run_config(
     # on --resume, the disk that result.h5 takes already is not asked for again
     have = _resumed_bytes(out) if resume else 0
     cfg = load_config(config, admit=admit_sizes(out, force_size=force_size, have=have))
+    # the phases before the levels, for summary.json: reading and building the
+    # configuration (mesh, checks, problem), then the plan and the set-up
+    phases = {"config": time.perf_counter() - t0}
     options = _solver_options(cfg.solver, solver, backend)
     if cfg.adapt is not None:
         from ..util.mpi import launched
@@ -283,6 +286,7 @@ def _run_config(
         )
         caution(f"warning: {outcome.warnings[-1]}")
     check_stop()  # safe points between the phases of the set-up
+    t1, before = time.perf_counter(), _phases_done(cfg)
     est = estimate_config(cfg)
     if not force_size:
         check_estimate(est, out, str(config), have=have)
@@ -312,6 +316,9 @@ def _run_config(
                 outcome.warnings.append(w)
                 caution(f"warning: {w}")
         tell(f"{cfg.title}: " + ", ".join(f"{k} {v}" for k, v in est.rows()))
+        # the plan: this block but the assembly, set-up and estimate (their own phases)
+        spent = _phases_done(cfg) - before
+        phases["plan"] = max(time.perf_counter() - t1 - spent, 0.0)
         check_stop()
     except BaseException:
         abandon_run(plan)
@@ -327,7 +334,7 @@ def _run_config(
         if plan.state is not None:
             outcome.resumed_from = int(plan.state.completed)
     else:
-        result = execute_run(plan, progress=progress)
+        result = execute_run(plan, progress=progress, phases=phases, start=t0)
         if isinstance(result, str):  # the arrays do not fit in memory: result.h5 only
             outcome.note = result
         else:
@@ -336,6 +343,13 @@ def _run_config(
             outcome.resumed_from = int(plan.state.completed)
     outcome.seconds = time.perf_counter() - t0
     return outcome
+
+
+def _phases_done(cfg: Any) -> float:
+    """Seconds of the phases that the discretization timed itself (assembly, set-up,
+    estimate) and not yet handed to a run; 0 before it exists."""
+    d = cfg.problem.__dict__.get("discrete")
+    return float(sum(d.timings.values())) if d is not None else 0.0
 
 
 def overshoot_lines(cfg: Any) -> list[str]:

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import shlex
+import time
 from contextlib import ExitStack
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -320,9 +321,20 @@ def _load_checkpoint(
     return state, dict(stored.get("solver") or {})
 
 
-def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
+def execute_run(
+    plan: RunPlan,
+    *,
+    progress: bool = True,
+    phases: dict[str, float] | None = None,
+    start: float | None = None,
+) -> Result | str:
     """Solve, streaming the levels into ``OUTDIR/result.h5`` with checkpoints; write
     the standard files when done.
+
+    ``phases`` (seconds of the phases before this call, e.g. ``config`` and ``plan``)
+    go into the timings of ``summary.json`` with the run's own; ``start``, the
+    :func:`time.perf_counter` at which the run began, makes ``run`` there the wall
+    time of the whole run, up to its last output file.
 
     Returns the result, or, when its arrays do not fit in memory, a line saying that the
     run ends with ``result.h5`` alone.
@@ -354,7 +366,7 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
             on_checkpoint=on_checkpoint,
         )
         sink = WearGuard(h5, cfg.problem)
-        timings: dict[str, float] = {}
+        timings: dict[str, float] = dict(phases or {})
         try:
             final = run_levels(
                 cfg.problem,
@@ -374,7 +386,7 @@ def execute_run(plan: RunPlan, *, progress: bool = True) -> Result | str:
             _stop(plan, sink, exc)
             raise
         try:
-            result = _finish(plan, timings)
+            result = _finish(plan, timings, start)
         except BaseException as exc:
             outputs_failed(plan, exc)
             raise
@@ -411,7 +423,22 @@ def abandon_run(plan: RunPlan) -> None:
         _release_lock(plan)
 
 
-def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
+def _add_timings(out: Path, result: Result, more: dict[str, float]) -> None:
+    """Add the phases timed after ``summary.json`` was written to it and to the result
+    (the file replaced as a whole: a kill leaves the old one or the new one)."""
+    import json
+
+    from ..post.results import SUMMARY_NAME
+    from ..util.atomic import write_atomic
+
+    result.timings.update(more)
+    path = out / SUMMARY_NAME
+    summary = json.loads(path.read_text(encoding="utf-8"))
+    summary["timings"].update(more)
+    write_atomic(path, json.dumps(summary, indent=2, allow_nan=False) + "\n", durable=True)
+
+
+def _finish(plan: RunPlan, timings: dict[str, float], start: float | None) -> Result | str:
     """The standard files of a completed run; the checkpoint is no longer needed.
 
     ``result.npz``, the summary, the figures and the ParaView series need the kept arrays
@@ -423,6 +450,7 @@ def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
     from ..util.system import available_memory
 
     cfg, out = plan.cfg, plan.out
+    tick = time.perf_counter()
     need, avail = stream_bytes(out / STREAM_NAME), available_memory()
     if avail and 3 * need > avail:
         write_marker(out, "complete", [STREAM_NAME], command="run")
@@ -455,6 +483,9 @@ def _finish(plan: RunPlan, timings: dict[str, float]) -> Result | str:
         between=check_stop,  # safe points between the files
         **({"paraview": cfg.output.paraview} if hasattr(cfg.output, "paraview") else {}),
     )
+    now = time.perf_counter()
+    # the outputs: reading the levels back, result.npz, summary, figures, ParaView files
+    _add_timings(out, result, {"outputs": now - tick, **({"run": now - start} if start else {})})
     files = [STREAM_NAME, *(f.split("/")[0] for names in written.values() for f in names)]
     write_marker(out, "complete", sorted(set(files)), command="run")
     for name in (CHECKPOINT_NAME, PARTIAL_NAME):  # after the marker: see completed_leftovers
