@@ -14,6 +14,16 @@ dense ``S_inv`` in between give the same result but were 1.3-1.8 times slower in
 ``benchmarks/bench_backends.py``). No factor of the whole matrix is formed in the
 factorization phase.
 
+In 3D the Schur factorization costs about twice the flops of a plain Cholesky of the
+same ``K`` (``benchmarks/bench_schur3d.py``): with the contact dofs last, every front
+above the contact face carries the face's dofs. PARDISO offers no cheaper way to the
+same block: its partial solve with sparse right-hand sides (``iparm[30]``) orders the
+marked dofs last as well (the same fill, and its solves for the block are slower than
+the Schur output), a user ordering (``iparm[4] = 1``) of PARDISO's own nested
+dissection with the contact dofs moved last has 5 times the fill (hexahedra
+32 x 16 x 16), and ``iparm[35] = 1``, ``iparm[23] = 0`` or ``10`` and serial METIS
+were not faster than the settings below.
+
 :class:`PardisoFactor` factorizes any square matrix (real nonsymmetric, ``mtype =
 11``, or SPD, ``mtype = 2``) for the full-space Newton path and Uzawa.
 
