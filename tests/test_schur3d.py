@@ -92,3 +92,13 @@ def test_singular_or_indefinite_stiffness_raises(system3d, backend, kind):
         bad = sp.csr_matrix(D @ K @ D)
     with pytest.raises(FactorizationError, match="could not be factorized"):
         schur_factorize(bad, last, points, backend)
+
+
+@pytest.mark.parametrize("c", [1, 7, 16, 37])
+def test_pardiso_transposes_its_schur_output_in_place(c):
+    from vemwear.solvers.backends.pardiso import _transpose_in_place
+
+    A = np.random.default_rng(c).normal(size=(c, c))
+    B = A.copy()
+    _transpose_in_place(B, block=8)  # tiles that do not divide c
+    assert np.array_equal(B, A.T)

@@ -236,6 +236,21 @@ def _upper(A: sp.csr_matrix) -> sp.csr_matrix:
     return sp.csr_matrix((A.data[keep], A.indices[keep], indptr), shape=A.shape)
 
 
+def _transpose_in_place(A: NDArray[np.float64], block: int = 512) -> None:
+    """Overwrite the square C-ordered ``A`` with its transpose, tile by tile (a copy
+    of one ``block x block`` tile at a time instead of one of ``A``)."""
+    c = A.shape[0]
+    for i0 in range(0, c, block):
+        i1 = min(i0 + block, c)
+        D = A[i0:i1, i0:i1]
+        D[...] = D.T.copy()
+        for j0 in range(i1, c, block):
+            j1 = min(j0 + block, c)
+            upper = A[i0:i1, j0:j1].copy()
+            A[i0:i1, j0:j1] = A[j0:j1, i0:i1].T
+            A[j0:j1, i0:i1] = upper.T
+
+
 def _output(out: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
     """``out`` as the (n, k) Fortran-ordered block PARDISO writes (a view), checked."""
     if out.shape != np.shape(b) or out.dtype != np.float64 or not out.flags.f_contiguous:
@@ -317,9 +332,16 @@ class PardisoSchur:
             rank[order] = np.arange(c)
             # the block in the order of ``last``, Fortran-ordered (the transpose of the
             # C-ordered block of S^T: the same entries), inverted in place; the output
-            # buffer is freed first (each is c^2 doubles: 320 MB for c = 6336)
-            S = out[: c * c].reshape(c, c).T[np.ix_(rank, rank)].T
-            del out
+            # buffer is freed first (each is c^2 doubles: 320 MB for c = 6336). When
+            # ``last`` is increasing (the contact dofs of a 3D run), the same array is
+            # PARDISO's own buffer transposed in place: no second c^2 block at the peak
+            block = out[: c * c].reshape(c, c)
+            if np.array_equal(rank, np.arange(c)):
+                _transpose_in_place(block)
+                S = block.T
+            else:
+                S = block.T[np.ix_(rank, rank)].T
+            del out, block
             self.S_inv = compliance_from_schur(S, overwrite_s=True)
             del S
             self.timings["schur"] = time.perf_counter() - tick
