@@ -275,32 +275,54 @@ def stiffness3d(
     """The stiffness of ``a_h`` (3.11) on all ``3 n_points`` dofs (dof ``3 v + c``).
 
     Local matrices are built by vertex count in chunks of :data:`CHUNK3` cells and
-    scattered once into a COO matrix.
+    summed by vertex pair: each cell gives ``n^2`` 3 x 3 blocks, the blocks of equal
+    (row vertex, column vertex) are summed in cell order, and the block matrix is
+    converted to CSR (sorted indices, no repeated entries). Sorting the ``n^2`` pairs
+    of a cell instead of its ``9 n^2`` scalar triplets makes this 2-3 times faster than
+    a COO-to-CSR conversion of the triplets (whose sums agree to round-off).
     """
     cg = cell_geometry(mesh, rule) if geometry is None else geometry
-    ndof = 3 * mesh.n_points
-    index = np.int32 if ndof < 2**31 - 1 else np.int64
-    total = int(np.sum((3 * cg.sizes) ** 2))
-    rows, cols = np.empty(total, dtype=index), np.empty(total, dtype=index)
-    vals = np.empty(total)
+    nv = mesh.n_points
+    total = int(np.sum(cg.sizes**2))
+    keys = np.empty(total, dtype=np.int64)  # row vertex * nv + column vertex
+    blocks = np.empty((total, 3, 3))
     at = 0
     for n, (ids, slots) in cg.groups().items():
-        n3 = 3 * n
         for a in range(0, len(ids), CHUNK3):
             sl = slots[a : a + CHUNK3]
-            v = cg.vertices[sl]
-            size = len(v) * n3 * n3
-            vals[at : at + size].reshape(len(v), n3, n3)[...] = element_matrices3d(
+            v = cg.vertices[sl].astype(np.int64)
+            size = len(v) * n * n
+            Ke = element_matrices3d(
                 mesh.points[v], cg.q[sl], cg.volume[ids[a : a + CHUNK3]], material, stabilization
             )[0]
-            d = (3 * v[:, :, None] + np.arange(3, dtype=index)).reshape(len(v), n3)
-            # entry (i, j) of a cell's matrix: row dof i, column dof j (broadcast in place)
-            rows[at : at + size].reshape(len(v), n3, n3)[...] = d[:, :, None]
-            cols[at : at + size].reshape(len(v), n3, n3)[...] = d[:, None, :]
+            # local dof 3 i + c: block (i, j) holds Ke[3 i + c, 3 j + d] at (c, d)
+            blocks[at : at + size].reshape(len(v), n, n, 3, 3)[...] = Ke.reshape(
+                len(v), n, 3, n, 3
+            ).transpose(0, 1, 3, 2, 4)
+            keys[at : at + size].reshape(len(v), n, n)[...] = v[:, :, None] * nv + v[:, None, :]
             at += size
-    A = sp.coo_matrix((vals, (rows, cols)), shape=(ndof, ndof)).tocsr()
-    A.sum_duplicates()
-    return A
+    order = np.argsort(keys)
+    sk = keys[order]
+    first = np.empty(total, dtype=bool)
+    first[:1] = True
+    np.not_equal(sk[1:], sk[:-1], out=first[1:])
+    pairs = sk[first]
+    slot = np.empty(total, dtype=np.int64)  # each cell block's place among the pairs
+    slot[order] = np.cumsum(first) - 1
+    del order, sk, first
+    # bincount adds in input (cell) order, entry by entry, without a sorted copy
+    flat = blocks.reshape(total, 9)
+    data = np.empty((len(pairs), 9))
+    for e in range(9):
+        data[:, e] = np.bincount(slot, weights=flat[:, e], minlength=len(pairs))
+    del blocks, flat, slot
+    index = np.int32 if 3 * nv < 2**31 - 1 else np.int64
+    indptr = np.zeros(nv + 1, dtype=index)
+    np.cumsum(np.bincount(pairs // nv, minlength=nv), out=indptr[1:])
+    B = sp.bsr_matrix(
+        (data.reshape(-1, 3, 3), (pairs % nv).astype(index), indptr), shape=(3 * nv, 3 * nv)
+    )
+    return B.tocsr()
 
 
 def body_force_vector3d(

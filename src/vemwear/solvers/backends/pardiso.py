@@ -14,6 +14,16 @@ dense ``S_inv`` in between give the same result but were 1.3-1.8 times slower in
 ``benchmarks/bench_backends.py``). No factor of the whole matrix is formed in the
 factorization phase.
 
+In 3D the Schur factorization costs about twice the flops of a plain Cholesky of the
+same ``K`` (``benchmarks/bench_schur3d.py``): with the contact dofs last, every front
+above the contact face carries the face's dofs. PARDISO offers no cheaper way to the
+same block: its partial solve with sparse right-hand sides (``iparm[30]``) orders the
+marked dofs last as well (the same fill, and its solves for the block are slower than
+the Schur output), a user ordering (``iparm[4] = 1``) of PARDISO's own nested
+dissection with the contact dofs moved last has 5 times the fill (hexahedra
+32 x 16 x 16), and ``iparm[35] = 1``, ``iparm[23] = 0`` or ``10`` and serial METIS
+were not faster than the settings below.
+
 :class:`PardisoFactor` factorizes any square matrix (real nonsymmetric, ``mtype =
 11``, or SPD, ``mtype = 2``) for the full-space Newton path and Uzawa.
 
@@ -226,6 +236,21 @@ def _upper(A: sp.csr_matrix) -> sp.csr_matrix:
     return sp.csr_matrix((A.data[keep], A.indices[keep], indptr), shape=A.shape)
 
 
+def _transpose_in_place(A: NDArray[np.float64], block: int = 512) -> None:
+    """Overwrite the square C-ordered ``A`` with its transpose, tile by tile (a copy
+    of one ``block x block`` tile at a time instead of one of ``A``)."""
+    c = A.shape[0]
+    for i0 in range(0, c, block):
+        i1 = min(i0 + block, c)
+        D = A[i0:i1, i0:i1]
+        D[...] = D.T.copy()
+        for j0 in range(i1, c, block):
+            j1 = min(j0 + block, c)
+            upper = A[i0:i1, j0:j1].copy()
+            A[i0:i1, j0:j1] = A[j0:j1, i0:i1].T
+            A[j0:j1, i0:i1] = upper.T
+
+
 def _output(out: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
     """``out`` as the (n, k) Fortran-ordered block PARDISO writes (a view), checked."""
     if out.shape != np.shape(b) or out.dtype != np.float64 or not out.flags.f_contiguous:
@@ -307,9 +332,16 @@ class PardisoSchur:
             rank[order] = np.arange(c)
             # the block in the order of ``last``, Fortran-ordered (the transpose of the
             # C-ordered block of S^T: the same entries), inverted in place; the output
-            # buffer is freed first (each is c^2 doubles: 320 MB for c = 6336)
-            S = out[: c * c].reshape(c, c).T[np.ix_(rank, rank)].T
-            del out
+            # buffer is freed first (each is c^2 doubles: 320 MB for c = 6336). When
+            # ``last`` is increasing (the contact dofs of a 3D run), the same array is
+            # PARDISO's own buffer transposed in place: no second c^2 block at the peak
+            block = out[: c * c].reshape(c, c)
+            if np.array_equal(rank, np.arange(c)):
+                _transpose_in_place(block)
+                S = block.T
+            else:
+                S = block.T[np.ix_(rank, rank)].T
+            del out, block
             self.S_inv = compliance_from_schur(S, overwrite_s=True)
             del S
             self.timings["schur"] = time.perf_counter() - tick
