@@ -34,6 +34,7 @@ traction is a reaction, not data).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -42,7 +43,7 @@ from ..mesh.polymesh import Mesh
 from ..vem.estimator import EDGE_CONSTANT, GAUSS3, elasticity_terms, traction_terms
 from ..vem.estimator2 import elasticity_terms2
 from ..vem.quadrature import Field
-from .estimate2 import contact_terms2
+from .estimate2 import contact_data, contact_terms2
 from .problem import Problem
 
 __all__ = ["TERMS", "Estimate", "estimate"]
@@ -135,35 +136,23 @@ def estimate(
     mat = problem.material
     loads, contact = _boundary_roles(problem)
     pr = np.asarray(p_rigid, float)
+    # the terms of the order: k = 2 reads every dof, k = 1 the vertex values
+    elastic: Any
+    contact_terms: Any
+    U: FloatArray = np.asarray(u, dtype=float)
     if problem.order == 2:
-        v = np.asarray(u, dtype=float).reshape(-1)
-        if v.size != problem.space.n_dofs:
+        U = U.reshape(-1)
+        if U.size != problem.space.n_dofs:
             raise ValueError(
                 f"k = 2: u must hold all {problem.space.n_dofs} dofs of the space (Result.dofs), "
-                f"got {v.size} values"
+                f"got {U.size} values"
             )
-        terms, fields = elasticity_terms2(
-            mesh,
-            mat,
-            v,
-            problem.f1,
-            loads,
-            problem.stabilization,
-            t,  # type: ignore[arg-type]
-        )
-        con, comp = contact_terms2(problem, v, fields, pr, wear, t, contact)
+        elastic, contact_terms = elasticity_terms2, contact_terms2
     else:
-        U = np.asarray(u, dtype=float).reshape(mesh.n_points, 2)
-        terms, sig = elasticity_terms(
-            mesh,
-            mat,
-            U,
-            problem.f1,
-            loads,
-            problem.stabilization,
-            t,  # type: ignore[arg-type]
-        )
-        con, comp = _contact_terms(problem, U, sig, pr, wear, t, contact)
+        U = U.reshape(mesh.n_points, 2)
+        elastic, contact_terms = elasticity_terms, _contact_terms
+    terms, fields = elastic(mesh, mat, U, problem.f1, loads, problem.stabilization, t)
+    con, comp = contact_terms(problem, U, fields, pr, wear, t, contact)
     terms["contact"] = EDGE_CONSTANT**2 / mat.coercivity * con
     terms["complementarity"] = comp
     return Estimate(terms)
@@ -184,14 +173,7 @@ def _contact_terms(
     con, comp = np.zeros(nc), np.zeros(nc)
     if not contact:
         return con, comp
-    cb = problem.contact
-    m = len(cb.nodes)
-    if p_rigid.shape != (m,):
-        raise ValueError(f"p_rigid must have one value per contact node ({m}), got {p_rigid.shape}")
-    w = np.zeros(m) if wear is None else np.asarray(wear, dtype=float)
-    nodal = problem.nodal
-    fric = problem.discrete.friction(t)
-    total = np.array([pc.friction_on == "total" for pc in problem.parts])[cb.part]
+    cb, m, w, nodal, fric, total = contact_data(problem, p_rigid, wear, t)
     node_of = np.full(mesh.n_points, -1, dtype=np.int64)
     node_of[cb.nodes] = np.arange(m)
     be, bc = mesh.boundary_edges, mesh.boundary_edge_cells

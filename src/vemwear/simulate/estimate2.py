@@ -18,7 +18,7 @@ between the three nodes of a piece in place of the linear one:
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -30,13 +30,28 @@ from ..vem.estimator2 import traction_terms2
 if TYPE_CHECKING:
     from .problem import Problem
 
-__all__ = ["contact_terms2"]
+__all__ = ["contact_data", "contact_terms2"]
 
 FloatArray = NDArray[np.float64]
 
 _S = GAUSS3[0]
 #: The quadratic Lagrange basis of the nodes (start, midpoint, end) at the Gauss points.
 _PHI = np.stack([(1 - _S) * (1 - 2 * _S), 4 * _S * (1 - _S), _S * (2 * _S - 1)])
+
+
+def contact_data(
+    problem: Problem, p_rigid: FloatArray, wear: ArrayLike | None, t: float
+) -> tuple[Any, int, FloatArray, dict[str, FloatArray], FloatArray, NDArray[np.bool_]]:
+    """What the contact terms of either order read: the contact boundary, its number of
+    nodes, the wear (zero when None), the nodal data, ``mu n*.tau`` at ``t`` and which
+    nodes take the friction on the total pressure; ``p_rigid`` checked."""
+    cb = problem.contact
+    m = len(cb.nodes)
+    if p_rigid.shape != (m,):
+        raise ValueError(f"p_rigid must have one value per contact node ({m}), got {p_rigid.shape}")
+    w = np.zeros(m) if wear is None else np.asarray(wear, dtype=float)
+    total = np.array([pc.friction_on == "total" for pc in problem.parts])[cb.part]
+    return cb, m, w, problem.nodal, problem.discrete.friction(t), total
 
 
 def contact_terms2(
@@ -58,14 +73,7 @@ def contact_terms2(
     )
     if not contact or rows.size == 0:
         return con, comp
-    cb = problem.contact
-    m = len(cb.nodes)
-    if p_rigid.shape != (m,):
-        raise ValueError(f"p_rigid must have one value per contact node ({m}), got {p_rigid.shape}")
-    w = np.zeros(m) if wear is None else np.asarray(wear, dtype=float)
-    nodal = problem.nodal
-    fric = problem.discrete.friction(t)
-    total = np.array([pc.friction_on == "total" for pc in problem.parts])[cb.part]
+    cb, m, w, nodal, fric, total = contact_data(problem, p_rigid, wear, t)
     E, C = mesh.boundary_edges[rows], mesh.boundary_edge_cells[rows]
     eid = edge_ids(mesh, E[:, 0], E[:, 1])
     node_of = np.full(mesh.n_points + len(mesh.edges), -1, dtype=np.int64)

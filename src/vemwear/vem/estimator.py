@@ -28,7 +28,7 @@ and :data:`EDGE_CONSTANT`; the contact terms are added above, by
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -56,6 +56,7 @@ __all__ = [
     "edge_gauss_points",
     "elasticity_terms",
     "jump_terms",
+    "load_residuals",
     "stabilization_terms",
     "traction_terms",
     "volume_terms",
@@ -181,6 +182,26 @@ def stabilization_terms(
     return out
 
 
+def load_residuals(
+    mesh: Mesh,
+    tractions: Mapping[str, Field],
+    t: float,
+    residual: Callable[[NDArray[np.int64], NDArray[np.int64], FloatArray], FloatArray],
+) -> FloatArray:
+    """``N_K`` per cell: ``residual(edges, cells, target)`` (the traction terms of a
+    projection, :func:`traction_terms` for k = 1) summed over the parts with a load, the
+    target the part's f2 at the three Gauss points of every piece."""
+    be, bc = mesh.boundary_edges, mesh.boundary_edge_cells
+    out = np.zeros(mesh.n_cells)
+    for name, f2 in tractions.items():
+        rows = np.flatnonzero(mesh.boundary_tags == mesh.part_code(name))
+        if rows.size:
+            x = edge_gauss_points(mesh, be[rows]).reshape(-1, 2)
+            tgt = eval_field(f2, x, t, f"traction of {name!r}").reshape(-1, 3, 2)
+            out += residual(be[rows], bc[rows], tgt)
+    return out
+
+
 def elasticity_terms(
     mesh: Mesh,
     material: Material,
@@ -214,14 +235,11 @@ def elasticity_terms(
     """
     U = np.asarray(u, dtype=float).reshape(mesh.n_points, 2)
     sig = cell_stresses(mesh, material, U)
-    be, bc = mesh.boundary_edges, mesh.boundary_edge_cells
-    traction = np.zeros(mesh.n_cells)
-    for name, f2 in tractions.items():
-        rows = np.flatnonzero(mesh.boundary_tags == mesh.part_code(name))
-        if rows.size:
-            x = edge_gauss_points(mesh, be[rows]).reshape(-1, 2)
-            tgt = eval_field(f2, x, t, f"traction of {name!r}").reshape(-1, 3, 2)
-            traction += traction_terms(mesh, sig, be[rows], bc[rows], tgt)
+
+    def residual(edges: NDArray[np.int64], cells: NDArray[np.int64], tgt: FloatArray) -> FloatArray:
+        return traction_terms(mesh, sig, edges, cells, tgt)
+
+    traction = load_residuals(mesh, tractions, t, residual)
     ce = EDGE_CONSTANT**2 / material.coercivity
     terms = {
         "element": ELEMENT_CONSTANT**2 / material.coercivity * volume_terms(mesh, f1, t),

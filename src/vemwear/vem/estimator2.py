@@ -31,7 +31,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polymesh import Mesh
 from .dofs2 import GAUSS3, P2Fields, cell_dofs2, project2
-from .estimator import EDGE_CONSTANT, ELEMENT_CONSTANT, cell_sums, edge_gauss_points
+from .estimator import (
+    EDGE_CONSTANT,
+    ELEMENT_CONSTANT,
+    cell_sums,
+    edge_gauss_points,
+    load_residuals,
+)
 from .local import Material
 from .local2 import element_matrices2
 from .quadrature import Field, eval_field, polygon_quadrature
@@ -156,14 +162,11 @@ def elasticity_terms2(
     ``Pi u`` (the k = 1 :func:`~vemwear.vem.estimator.elasticity_terms` with ``u`` all the
     dofs of the second-order space)."""
     fields = project2(mesh, material, u)
-    be, bc = mesh.boundary_edges, mesh.boundary_edge_cells
-    traction = np.zeros(mesh.n_cells)
-    for name, f2 in tractions.items():
-        rows = np.flatnonzero(mesh.boundary_tags == mesh.part_code(name))
-        if rows.size:
-            x = edge_gauss_points(mesh, be[rows]).reshape(-1, 2)
-            tgt = eval_field(f2, x, t, f"traction of {name!r}").reshape(-1, 3, 2)
-            traction += traction_terms2(mesh, fields, material, be[rows], bc[rows], tgt)
+
+    def residual(edges: NDArray[np.int64], cells: NDArray[np.int64], tgt: FloatArray) -> FloatArray:
+        return traction_terms2(mesh, fields, material, edges, cells, tgt)
+
+    traction = load_residuals(mesh, tractions, t, residual)
     ce = EDGE_CONSTANT**2 / material.coercivity
     terms = {
         "element": ELEMENT_CONSTANT**2 / material.coercivity * volume_terms2(mesh, f1, t),
