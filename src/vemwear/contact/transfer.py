@@ -28,7 +28,7 @@ from ..mesh.locate import extent_tol, point_segment_distance
 from ..mesh.polymesh import Mesh, MeshError
 from ..vem.dofs2 import edge_ids
 
-__all__ = ["transfer_along_contact"]
+__all__ = ["transfer_along_contact", "vertex_slopes"]
 
 
 def transfer_along_contact(
@@ -144,15 +144,22 @@ def _node_slopes(
     weighted harmonic mean otherwise; at an end of a chain of edges, the slope of its
     edge."""
     L = np.linalg.norm(mesh.points[E[:, 1]] - mesh.points[E[:, 0]], axis=1)
-    delta = (vb - va) / L
-    n = mesh.n_points
-    d_in, d_out = np.zeros(n), np.zeros(n)
-    h_in, h_out = np.zeros(n), np.zeros(n)
-    d_in[E[:, 1]], h_in[E[:, 1]] = delta, L
-    d_out[E[:, 0]], h_out[E[:, 0]] = delta, L
+    d_in, d_out, h_in, h_out = vertex_slopes(mesh.n_points, E, (vb - va) / L, L)
     w1, w2 = 2 * h_out + h_in, h_out + 2 * h_in
     same = d_in * d_out > 0
     with np.errstate(divide="ignore", invalid="ignore"):
         mean = (w1 + w2) / (w1 / d_in + w2 / d_out)
     both = (h_in > 0) & (h_out > 0)
     return np.where(both, np.where(same, mean, 0.0), d_in + d_out)
+
+
+def vertex_slopes(
+    n: int, E: NDArray[np.int64], slope: NDArray[np.float64], L: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], ...]:
+    """At each of ``n`` vertices, the slope and length of the edge of ``E`` (oriented along
+    the boundary) that ends there and of the one that starts there: ``(s_in, s_out, L_in,
+    L_out)``, zero where there is none (the ends of a chain of edges)."""
+    s_in, s_out, l_in, l_out = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    s_in[E[:, 1]], l_in[E[:, 1]] = slope, L
+    s_out[E[:, 0]], l_out[E[:, 0]] = slope, L
+    return s_in, s_out, l_in, l_out

@@ -43,7 +43,7 @@ from ..mesh.polymesh import Mesh
 from ..vem.estimator import EDGE_CONSTANT, GAUSS3, elasticity_terms, traction_terms
 from ..vem.estimator2 import elasticity_terms2
 from ..vem.quadrature import Field
-from .estimate2 import contact_data, contact_terms2
+from .estimate2 import contact_data, contact_terms2, layer_traction
 from .problem import Problem
 
 __all__ = ["TERMS", "Estimate", "estimate"]
@@ -202,14 +202,8 @@ def _contact_terms(
 
     un = lin(np.sum(U[E[:, 0]] * n, axis=1), np.sum(U[E[:, 1]] * n, axis=1))
     r = un - nodal_at(nodal["gap"]) - nodal_at(w)
-    part = cb.part[ia_]
-    ps = np.empty_like(r)
-    for i, pc in enumerate(problem.parts):
-        sel = part == i
-        ps[sel] = np.asarray(pc.p(r[sel]), dtype=float)
-    pr = nodal_at(p_rigid, zero_off=True)
-    ft = np.where(total[ia_][:, None], ps + pr, ps) * nodal_at(fric, zero_off=True)
-    tgt = -(ps + pr)[..., None] * n[:, None, :] - ft[..., None] * tau[:, None, :]
+    pr, fg = nodal_at(p_rigid, zero_off=True), nodal_at(fric, zero_off=True)
+    tgt = layer_traction(problem, cb.part[ia_], total[ia_], r, pr, fg, n, tau)
     con += traction_terms(mesh, sig, E, C, tgt)
     # int_e p_rigid * slack for both linear: L/6 (2 a A + a B + b A + 2 b B)
     pa, pb = np.where(ia >= 0, p_rigid[ia_], 0.0), np.where(ib >= 0, p_rigid[ib_], 0.0)

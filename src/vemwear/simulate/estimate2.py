@@ -30,7 +30,7 @@ from ..vem.estimator2 import traction_terms2
 if TYPE_CHECKING:
     from .problem import Problem
 
-__all__ = ["contact_data", "contact_terms2"]
+__all__ = ["contact_data", "contact_terms2", "layer_traction"]
 
 FloatArray = NDArray[np.float64]
 
@@ -52,6 +52,28 @@ def contact_data(
     w = np.zeros(m) if wear is None else np.asarray(wear, dtype=float)
     total = np.array([pc.friction_on == "total" for pc in problem.parts])[cb.part]
     return cb, m, w, problem.nodal, problem.discrete.friction(t), total
+
+
+def layer_traction(
+    problem: Problem,
+    part: NDArray[np.int64],
+    total: NDArray[np.bool_],
+    r: FloatArray,
+    p_rigid: FloatArray,
+    fric: FloatArray,
+    n: FloatArray,
+    tau: FloatArray,
+) -> FloatArray:
+    """The layers' traction ``t_C`` at the Gauss points (pieces, 3, 2) of pieces of the
+    contact ``part`` (index into ``problem.parts``) with unit normals ``n`` and tangents
+    ``tau``: the compliance law of the part at the penetration ``r``, the rigid pressure and
+    ``mu n*.tau`` at the points, friction on the total pressure where ``total``."""
+    ps = np.empty_like(r)
+    for i, pc in enumerate(problem.parts):  # a few parts, each law on its points at once
+        sel = part == i
+        ps[sel] = np.asarray(pc.p(r[sel]), dtype=float)
+    ft = np.where(total[:, None], ps + p_rigid, ps) * fric
+    return np.asarray(-(ps + p_rigid)[..., None] * n[:, None, :] - ft[..., None] * tau[:, None, :])
 
 
 def contact_terms2(
@@ -106,14 +128,9 @@ def contact_terms2(
     un_nodes = np.stack([np.sum(x * n, axis=1) for x in (ua, um, ub)])
     un = np.einsum("kg,ke->eg", _PHI, un_nodes)
     r = un - at_gauss(nodal["gap"]) - at_gauss(w)
-    part = cb.part[fill]
-    ps = np.empty_like(r)
-    for i, pc in enumerate(problem.parts):
-        sel = part == i
-        ps[sel] = np.asarray(pc.p(r[sel]), dtype=float)
     pr = at_gauss(p_rigid, zero_off=True)
-    ft = np.where(total[fill][:, None], ps + pr, ps) * at_gauss(fric, zero_off=True)
-    tgt = -(ps + pr)[..., None] * n[:, None, :] - ft[..., None] * tau[:, None, :]
+    fg = at_gauss(fric, zero_off=True)
+    tgt = layer_traction(problem, cb.part[fill], total[fill], r, pr, fg, n, tau)
     con += traction_terms2(mesh, fields, problem.material, E, C, tgt)
     # p_rigid times the slack, both quadratic along the piece (the slack at the nodes'
     # normals), integrated exactly by the three Gauss points

@@ -27,6 +27,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..contact.transfer import vertex_slopes
 from ..mesh.polymesh import Mesh
 
 __all__ = ["predicted_wear", "wear_indicators"]
@@ -77,13 +78,8 @@ def wear_indicators(
     rows = np.concatenate([np.flatnonzero(mesh.boundary_tags == mesh.part_code(p)) for p in parts])
     E, C = mesh.boundary_edges[rows], mesh.boundary_edge_cells[rows]
     L = np.linalg.norm(mesh.points[E[:, 1]] - mesh.points[E[:, 0]], axis=1)
-    slope = (W[E[:, 1]] - W[E[:, 0]]) / L
     # a node's incoming and outgoing pieces along the boundary's orientation
-    n = mesh.n_points
-    s_in, s_out = np.zeros(n), np.zeros(n)
-    l_in, l_out = np.zeros(n), np.zeros(n)
-    s_in[E[:, 1]], l_in[E[:, 1]] = slope, L
-    s_out[E[:, 0]], l_out[E[:, 0]] = slope, L
+    s_in, s_out, l_in, l_out = vertex_slopes(mesh.n_points, E, (W[E[:, 1]] - W[E[:, 0]]) / L, L)
     both = (l_in > 0) & (l_out > 0)
     kappa = np.where(both, 2.0 * (s_out - s_in) / np.where(both, l_in + l_out, 1.0), 0.0)
     k_e = np.minimum(np.abs(kappa[E[:, 0]]), np.abs(kappa[E[:, 1]]))
