@@ -4,6 +4,7 @@ by the wear that refine along Gamma_C only and start again bitwise."""
 
 from __future__ import annotations
 
+import dataclasses
 import tomllib
 
 import numpy as np
@@ -148,3 +149,80 @@ def test_the_shipped_punch_adapts_along_the_arc_and_beats_the_uniform_mesh(tmp_p
     e_coarse = error(coarse.contact_points[:, 0], coarse.wear[-1])
     assert e_adaptive < e_coarse / 3, (e_adaptive, e_coarse)
     assert 2 * len(points) < fine_problem.space.n_dofs
+
+
+def test_a_wear_mesh_change_refines_until_the_target_error() -> None:
+    """With ``target_error`` the rounds of one mesh change go on until the estimate of
+    the profile on the new mesh is at most the target (here reached within the rounds;
+    the rounds see the profile moved by the cubic transfer, not the exact one)."""
+    from vemwear.mesh.adapt import CellTree
+    from vemwear.simulate.adaptive_time import AdaptSettings
+    from vemwear.simulate.mesh_change import change_mesh_for_wear
+
+    mesh = _strip(8)
+    nodes, x = _bottom(mesh)
+    tree = CellTree.initial(mesh.n_cells)
+    eta0 = float(np.sqrt(wear_indicators(mesh, nodes, np.exp(2 * x), ("contact",)).sum()))
+    for target in (eta0 / 3, eta0 / 8):
+        cfg = AdaptSettings(1, target_error=target, estimator="wear", transfer="cubic")
+        new, _ = change_mesh_for_wear(
+            mesh, tree, nodes, np.exp(2 * x), cfg, None, (("contact",), 0.0, True)
+        )
+        on, xn = _bottom(new)
+        eta = float(np.sqrt(wear_indicators(new, on, np.exp(2 * xn), ("contact",)).sum()))
+        assert eta <= 1.2 * target < eta0, (eta, target, eta0)
+        assert new.n_cells < 8 * mesh.n_cells  # not a uniform refinement of the strip
+
+
+def test_whole_runs_marked_by_the_wear_refine_along_the_arc_to_the_target(tmp_path) -> None:
+    """:func:`~vemwear.simulate.adapt` with ``estimator = "wear"`` on the shipped punch
+    (24 x 8 cells): every pass solves the whole run, the cells along the arc are refined
+    for its wear at T, the estimate falls by more than half from pass to pass, the loop
+    stops at the first pass within ``target_error``, and the final wear is closer to that
+    of the 96 x 32 mesh than the first pass's, with fewer dofs than that mesh."""
+    from vemwear.config import load_config
+    from vemwear.examples import config_path
+    from vemwear.examples.punch_mesh import punch_mesh
+    from vemwear.mesh import write_mesh
+    from vemwear.simulate import adapt, simulate
+
+    pr = load_config(config_path("punch")).problem
+    steps = adapt(pr, estimator="wear", transfer="cubic", max_passes=3, max_cells=4000)
+    assert len(steps) == 3
+    eta = [s.eta for s in steps]
+    assert eta[1] < eta[0] / 2 and eta[2] < eta[1] / 2, eta
+    last = steps[-1]
+    mesh, level = last.problem.mesh, last.level
+    centres = np.array([mesh.points[c].mean(axis=0) for c in mesh.cells])
+    assert level.max() >= 2 and np.all(centres[level >= 1, 1] < 0.15)  # along the arc
+    assert steps[0].marked.size > 0 and last.marked.size == 0
+
+    target = 0.5 * (eta[1] + eta[2])
+    again = adapt(pr, estimator="wear", transfer="cubic", max_passes=10, target_error=target)
+    assert again[-1].eta <= target and all(s.eta > target for s in again[:-1])
+
+    write_mesh(punch_mesh(96, 32), tmp_path / "punch.msh")  # 16 times the cells
+    (tmp_path / "punch.toml").write_text(config_path("punch").read_text())
+    fine_problem = load_config(tmp_path / "punch.toml").problem
+    fine = simulate(fine_problem, "newton")
+
+    def error(r) -> float:
+        x, w = r.contact_points[:, 0], r.wear[-1]
+        xf, wf = fine.contact_points[:, 0], fine.wear[-1]
+        o, of = np.argsort(x), np.argsort(xf)
+        return float(np.abs(np.interp(xf[of], x[o], w[o]) - wf[of]).max())
+
+    assert error(last.result) < error(steps[0].result) / 3
+    assert last.n_dofs < fine_problem.space.n_dofs / 4
+    # the residual estimator stays available: computed from the pass when asked for
+    assert last.estimate.total > 0
+
+
+def test_the_loop_refuses_an_unknown_estimator_and_the_wear_for_k_2() -> None:
+    from vemwear.simulate import adapt
+
+    pr = ex52.problem(0.2, 2.0, divisions=(8, 4), steps=2)
+    with pytest.raises(ValueError, match="estimator must be 'residual' or 'wear'"):
+        adapt(pr, estimator="energy", max_passes=1)
+    with pytest.raises(ValueError, match="estimator = 'wear' is implemented for k = 1"):
+        adapt(dataclasses.replace(pr, order=2), estimator="wear")

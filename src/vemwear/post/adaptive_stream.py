@@ -305,5 +305,5 @@ def read_adaptive(
         res = result_from_arrays(pr, data, solver=solver, copy=False)
         tree = CellTree(*(data[f"tree_{n}"] for n in _TREE))
         est = Estimate({term: data[f"eta_{term}"] for term in TERMS})
-        segments.append(Segment(pr, first, last, res, est, tree))
+        segments.append(Segment(pr, first, last, res, tree, known_estimate=est))
     return segments

@@ -25,25 +25,26 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..contact.transfer import transfer_along_contact
-from ..mesh.adapt import CellTree, dorfler_marking, refine_tree
-from ..mesh.coarsen import coarsen_tree, coarsening_marking
+from ..mesh.adapt import CellTree
 from ..mesh.curves import OFF_CHORD, BoundaryCurve
 from ..mesh.polymesh import Mesh
 from ..solvers.backends import reusing_factorizations
-from .estimate import Estimate, estimate
+from .estimate import Estimate, estimate_last
 from .levels import run_levels
 from .loop import MemorySink, Result
+from .mesh_change import change_mesh, change_mesh_for_wear
 from .options import SolverOptions
 from .problem import Problem
 from .stream import LoopState, StoragePlan
 from .timegrid import TimeGrid
-from .wear_estimate import predicted_wear, wear_indicators
+from .wear_estimate import predicted_wear
 
 __all__ = ["AdaptSettings", "AdaptiveState", "Segment", "simulate_adaptive"]
 
@@ -61,18 +62,28 @@ class Segment:
         segment).
     result : Result
         Its arrays; the rows of the levels before ``first`` are not computed (zero).
-    estimate : Estimate
-        The estimator at ``last``.
     tree : CellTree
         The levels and families of its cells.
+    known_estimate : Estimate, optional
+        The residual estimate at ``last`` when it is known already (read back from a
+        results file); see :attr:`estimate`.
     """
 
     problem: Problem
     first: int
     last: int
     result: Result
-    estimate: Estimate
     tree: CellTree
+    known_estimate: Estimate | None = field(default=None, repr=False)
+
+    @cached_property
+    def estimate(self) -> Estimate:
+        """The residual estimator at :attr:`last`, computed from the segment's last level
+        when first asked for: at once when it marks the cells, only on request when the
+        wear marks them (a run for the wear does not pay for it)."""
+        if self.known_estimate is not None:
+            return self.known_estimate
+        return estimate_last(self.problem, self.result, level=self.last)
 
 
 @dataclass(frozen=True)
@@ -303,10 +314,7 @@ def _segments(
         run_levels(pr, opts, sink, plan, start=state, timings=sink.result.timings)
         res = sink.result
         res.completed = n1 + 1
-        # k = 2: the estimator needs every dof (the edge and cell means too)
-        u_last = res.u[-1] if res.dofs is None else res.dofs[-1]
-        est = estimate(pr, u_last, res.p_rigid[-1], res.wear[-1], level=n1)
-        seg = Segment(pr, n0, n1, res, est, tree)
+        seg = Segment(pr, n0, n1, res, tree)
         if keep:
             segments.append(seg)
         if n1 == N:
@@ -319,9 +327,10 @@ def _segments(
                 pr.discrete, res.wear[-1], res.p_soft[-1], res.p_rigid[-1], t[n1], t[N]
             )
             move = (parts, off_chord, cubic)
-            new, tree = _change_for_wear(mesh, tree, pr.contact.nodes, W, cfg, curve, move)
+            new, tree = change_mesh_for_wear(mesh, tree, pr.contact.nodes, W, cfg, curve, move)
         else:
-            new, tree = _change(mesh, tree, est.indicators, est.total, cfg, curve)
+            est = seg.estimate
+            new, tree = change_mesh(mesh, tree, est.indicators, est.total, cfg, curve)
         w = res.wear[-1]
         if new is not mesh:
             nxt = dataclasses.replace(problem, mesh=new)
@@ -333,67 +342,3 @@ def _segments(
         mesh, n0, k = new, n1, k + 1
         if on_segment is not None:
             on_segment(seg, AdaptiveState(k, n0, mesh, tree, w))
-
-
-def _change(
-    mesh: Mesh,
-    tree: CellTree,
-    eta2: NDArray[np.float64],
-    total: float,
-    cfg: AdaptSettings,
-    curve: BoundaryCurve | None,
-) -> tuple[Mesh, CellTree]:
-    """Coarsen, then refine, once, by the indicators ``eta2`` (their estimate ``total``):
-    the new mesh and its tree."""
-    refine = dorfler_marking(eta2, cfg.theta)
-    if cfg.max_level is not None:
-        refine = refine[tree.level[refine] < cfg.max_level]
-    if cfg.target_error is not None and total <= cfg.target_error:
-        refine = refine[:0]  # accurate enough: coarsening only
-    owner = np.arange(mesh.n_cells)
-    if cfg.coarsen > 0:
-        spare = np.setdiff1d(coarsening_marking(eta2, cfg.coarsen), refine)
-        mesh, tree, owner = coarsen_tree(mesh, tree, spare, cfg.max_difference, curve)
-    if refine.size:
-        new, tree2, _ = refine_tree(mesh, tree, owner[refine], cfg.max_difference, curve)
-        if cfg.max_cells is None or new.n_cells <= cfg.max_cells:
-            return new, tree2
-    return mesh, tree
-
-
-#: Most refinement rounds of one mesh change by the wear indicator.
-WEAR_ROUNDS = 8
-
-
-def _change_for_wear(
-    mesh: Mesh,
-    tree: CellTree,
-    nodes: NDArray[np.int64],
-    W: NDArray[np.float64],
-    cfg: AdaptSettings,
-    curve: BoundaryCurve | None,
-    move: tuple[tuple[str, ...], float, bool],
-) -> tuple[Mesh, CellTree]:
-    """A mesh change by the wear indicator of the predicted profile ``W`` at the contact
-    ``nodes``: coarsen and refine once (:func:`_change`), then refine again, the profile
-    moved onto each new mesh (no solve), until its indicator is a sixteenth of the old
-    mesh's (what one uniform refinement gives a smooth profile, ``L^5`` per piece over
-    twice the pieces), :data:`WEAR_ROUNDS` rounds or ``max_cells``."""
-    parts, off_chord, cubic = move
-    eta2 = wear_indicators(mesh, nodes, W, parts)
-    goal = float(eta2.sum()) / 16.0
-    new, tree = _change(mesh, tree, eta2, float(np.sqrt(eta2.sum())), cfg, curve)
-    if cfg.target_error is not None and np.sqrt(eta2.sum()) <= cfg.target_error:
-        return new, tree
-    for _ in range(WEAR_ROUNDS - 1):
-        if new is mesh:  # nothing refined: marks at max_level, or max_cells reached
-            break
-        on = np.unique(np.concatenate([new.part_edges(p) for p in parts]))
-        W = transfer_along_contact(mesh, nodes, W, new.points[on], parts, off_chord, cubic)
-        mesh, nodes = new, on
-        eta2 = wear_indicators(mesh, nodes, W, parts)
-        if eta2.sum() <= goal:
-            break
-        cfg_refine = dataclasses.replace(cfg, coarsen=0.0)
-        new, tree = _change(mesh, tree, eta2, float(np.sqrt(eta2.sum())), cfg_refine, curve)
-    return new, tree

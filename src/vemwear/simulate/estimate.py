@@ -34,7 +34,7 @@ traction is a reaction, not data).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -46,7 +46,10 @@ from ..vem.quadrature import Field
 from .estimate2 import contact_data, contact_terms2, layer_traction
 from .problem import Problem
 
-__all__ = ["TERMS", "Estimate", "estimate"]
+if TYPE_CHECKING:
+    from .loop import Result
+
+__all__ = ["TERMS", "Estimate", "estimate", "estimate_last"]
 
 FloatArray = NDArray[np.float64]
 
@@ -213,3 +216,10 @@ def _contact_terms(
     q = L / 6.0 * (2 * pa * sa + pa * sb + pb * sa + 2 * pb * sb)
     comp += np.bincount(C, np.abs(q), minlength=nc)
     return con, comp
+
+
+def estimate_last(problem: Problem, result: Result, level: int = -1) -> Estimate:
+    """:func:`estimate` of the last stored level of ``result``, the time level ``level``
+    of ``problem`` (for k = 2 with every dof, ``Result.dofs``)."""
+    u = result.u[-1] if result.dofs is None else result.dofs[-1]
+    return estimate(problem, u, result.p_rigid[-1], result.wear[-1], level=level)
