@@ -32,13 +32,20 @@ def test_the_settings_reach_the_adaptive_run() -> None:
     flat = parse_config(_config({"every": 2, "max_cells": 200, "curved": False})).adapt
     assert flat is not None and not flat.curved
     assert parse_config(_config(None)).adapt is None
+    # whole runs first: without every the mesh they make stays for every level
+    runs = parse_config(_config({"passes": 3, "max_cells": 200, "estimator": "wear"}))
+    assert runs.adapt is not None and runs.adapt.passes == 3
+    assert runs.adapt.every == len(runs.problem.time.t) - 1
 
 
 @pytest.mark.parametrize(
     ("adapt", "sections", "message"),
     [
         ({"every": 2}, {}, "[adapt] needs max_cells or target_error"),
-        ({"max_cells": 100}, {}, "[adapt] missing required key 'every'"),
+        ({"max_cells": 100}, {}, "[adapt] needs every (time levels between mesh changes)"),
+        ({"max_cells": 100, "passes": 1}, {}, "[adapt] needs every"),
+        ({"max_cells": 100, "passes": 0}, {}, "[adapt] needs every"),
+        ({"every": 2, "max_cells": 100, "passes": 0}, {}, "[adapt] passes input should be"),
         ({"every": 0, "max_cells": 100}, {}, "[adapt] every input should be greater"),
         ({"every": 2, "max_cells": 100, "theta": 0.0}, {}, "[adapt] theta input should be"),
         ({"every": 2, "max_cells": 100, "theta": 1.5}, {}, "[adapt] theta input should be"),

@@ -226,3 +226,66 @@ def test_the_loop_refuses_an_unknown_estimator_and_the_wear_for_k_2() -> None:
         adapt(pr, estimator="energy", max_passes=1)
     with pytest.raises(ValueError, match="estimator = 'wear' is implemented for k = 1"):
         adapt(dataclasses.replace(pr, order=2), estimator="wear")
+
+
+def test_a_config_with_passes_makes_the_mesh_by_whole_runs_and_resumes_bitwise(tmp_path) -> None:
+    """``[adapt] passes = 2`` on the shipped punch: ``vemwear run`` solves the whole run
+    once on the 24 x 8 mesh, refines it for that run's wear at T, then runs with mesh
+    changes every 8 levels; its meshes and wear equal the API's bitwise, summary.json
+    lists the pass, and a run killed after a mesh change resumes to the same arrays."""
+    import dataclasses
+    import json
+    import signal
+    import subprocess
+    import sys
+
+    import h5py
+
+    from conftest import run_until_segments, segments_done
+    from vemwear.config import load_config
+    from vemwear.examples import config_path
+
+    text = config_path("punch").read_text() + (
+        '\n[adapt]\nestimator = "wear"\ntransfer = "cubic"\npasses = 2\nevery = 4\n'
+        "max_cells = 4000\n"
+    )
+    (tmp_path / "punch.toml").write_text(text)
+    (tmp_path / "punch.msh").write_bytes(config_path("punch").with_suffix(".msh").read_bytes())
+    config = tmp_path / "punch.toml"
+
+    def cli(out, *extra):
+        cmd = [sys.executable, "-m", "vemwear", "run", str(config), "-o", str(out)]
+        return [*cmd, "--no-progress", *extra]
+
+    def groups(path):
+        with h5py.File(path, "r") as f:
+            return {n: {k: f[n][k][()] for k in f[n]} for n in f if n.startswith("mesh_")}
+
+    done = subprocess.run(cli(tmp_path / "ref"), capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    summary = json.loads((tmp_path / "ref" / "summary.json").read_text())
+    assert [p["cells"] for p in summary["adaptive"]["passes"]] == [192]
+    reference = groups(tmp_path / "ref" / "result.h5")
+    cfg = load_config(config)
+    assert cfg.adapt is not None and cfg.adapt.passes == 2
+    segs = simulate_adaptive(cfg.problem, **dataclasses.asdict(cfg.adapt), solver=cfg.solver)
+    assert segs[0].problem.mesh.n_cells > 192 and len(segs) == len(reference) == 8
+    for k, (g, seg) in enumerate(zip(reference.values(), segs, strict=True)):
+        rows = np.arange(seg.first, seg.last + (k == len(segs) - 1))  # the owned levels
+        assert np.array_equal(g["points"], seg.problem.mesh.points)
+        assert np.array_equal(g["wear"], seg.result.wear[rows])
+
+    out = tmp_path / "out"
+    proc = run_until_segments(cli(out), out, 3)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    assert 3 <= segments_done(out) < len(reference)
+    again = subprocess.run(cli(out, "--resume"), capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0, again.stderr
+    got = groups(out / "result.h5")
+    assert got.keys() == reference.keys()
+    for name, g in reference.items():
+        for k, v in g.items():
+            assert np.array_equal(got[name][k], v), (name, k)
+    resumed = json.loads((out / "summary.json").read_text())
+    assert resumed["adaptive"]["passes"] == summary["adaptive"]["passes"]

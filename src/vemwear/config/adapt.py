@@ -33,7 +33,12 @@ class Adapt(Section):
         "predicted at the final time along Gamma_C, k = 1; a mesh change refines until it "
         "has fallen as one uniform refinement would make it fall)",
     )
-    every: int = Field(ge=1, description="time levels between mesh changes, >= 1")
+    every: int | None = Field(
+        None,
+        ge=1,
+        description="time levels between mesh changes, >= 1; required unless passes > 1 "
+        "(without it the run keeps the mesh the passes made)",
+    )
     theta: float = Field(
         0.5, gt=0, le=1, description="Dörfler's bulk fraction of eta^2 marked for refinement"
     )
@@ -71,6 +76,13 @@ class Adapt(Section):
         "initial mesh's boundary vertices (false: onto the chords); straight parts are "
         "not affected",
     )
+    passes: int = Field(
+        1,
+        ge=1,
+        description="whole runs before the run: the run starts on the mesh refined after "
+        "passes - 1 solves of the whole time interval, each marked by the estimator at its "
+        "final level (for 'wear': the wear at T); 1: none",
+    )
     transfer: Literal["linear", "cubic"] = Field(
         "linear",
         description="how the wear moves to a new mesh: 'linear' (the piecewise linear "
@@ -88,16 +100,29 @@ class Adapt(Section):
                 "needs max_cells or target_error (or both): without either the refinement "
                 "goes on at every mesh change"
             )
+        if "every" not in data and not (isinstance(p := data.get("passes"), int) and p > 1):
+            raise error(
+                "needs every (time levels between mesh changes) unless passes > 1 (whole runs "
+                "that make the mesh of the run)"
+            )
         if "coarsen_fraction" in data and data.get("coarsen") is not True:
             raise error("coarsen_fraction is given but coarsen is not true; set coarsen = true")
         return data
 
 
 def adapt_settings(
-    src: str, a: Adapt, raw: Mapping[str, Any], *, dim: int, order: int, n_cells: int
+    src: str,
+    a: Adapt,
+    raw: Mapping[str, Any],
+    *,
+    dim: int,
+    order: int,
+    n_cells: int,
+    levels: int,
 ) -> AdaptSettings:
-    """The settings of ``[adapt]`` for a mesh of dimension ``dim`` and ``n_cells`` cells
-    and the order ``order`` of the space.
+    """The settings of ``[adapt]`` for a mesh of dimension ``dim`` and ``n_cells`` cells,
+    the order ``order`` of the space and a run of ``levels`` time levels (without
+    ``every``, the mesh stays for all of them).
 
     Raises
     ------
@@ -136,7 +161,7 @@ def adapt_settings(
         )
     with at(src, "[adapt]", raw.get("adapt", {})):
         return AdaptSettings(
-            every=a.every,
+            every=a.every if a.every is not None else max(levels - 1, 1),
             theta=a.theta,
             coarsen=a.coarsen_fraction if a.coarsen else 0.0,
             max_cells=a.max_cells,
@@ -146,6 +171,7 @@ def adapt_settings(
             curved=a.curved,
             estimator=a.estimator,
             transfer=a.transfer,
+            passes=a.passes,
         )
 
 

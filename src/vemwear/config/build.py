@@ -456,7 +456,7 @@ def parse_config(
     dim = 3 if isinstance(mesh, Mesh3D) else 2
     adapt = None
     if c.adapt is not None:
-        kw = {"dim": dim, "order": c.vem.order, "n_cells": mesh.n_cells}
+        kw = {"dim": dim, "order": c.vem.order, "n_cells": mesh.n_cells, "levels": sizes.levels}
         adapt = adapt_settings(src, c.adapt, raw, **kw)
     check_dims(src, c, raw, dim)
     check_scales(src, mesh, c)

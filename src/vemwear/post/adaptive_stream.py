@@ -48,6 +48,7 @@ __all__ = [
     "is_adaptive",
     "read_adaptive",
     "read_groups",
+    "read_passes",
     "segment_arrays",
 ]
 
@@ -166,6 +167,15 @@ class AdaptiveH5:
             g.create_dataset(key, data=value)
         self.sync()
 
+    def passes(self, cells: list[int], eta: list[float]) -> None:
+        """Record the whole runs before the run (``[adapt] passes``) so far: the cells of
+        each one's mesh and its estimate; make the file durable."""
+        for name, values in (("pass_cells", np.array(cells, np.int64)), ("pass_eta", eta)):
+            if name in self.file:
+                del self.file[name]
+            self.file.create_dataset(name, data=np.asarray(values))
+        self.sync()
+
     def sync(self) -> None:
         """Flush the file to the disk (HDF5 flush plus ``fsync``)."""
         self.file.flush()
@@ -192,6 +202,16 @@ class AdaptiveH5:
 def _read_group(g: Any) -> dict[str, NDArray[Any]]:
     out = {k: np.asarray(g[k][()]) for k in g}
     return {k: np.char.decode(v, "utf-8") if v.dtype.kind == "S" else v for k, v in out.items()}
+
+
+def read_passes(path: str | os.PathLike[str]) -> list[dict[str, Any]]:
+    """The whole runs before an adaptive run (:meth:`AdaptiveH5.passes`): per pass, the
+    cells of its mesh and its estimate; empty without ``[adapt] passes``."""
+    with _h5py().File(path, "r") as f:
+        if "pass_cells" not in f:
+            return []
+        cells, eta = f["pass_cells"][()], f["pass_eta"][()]
+    return [{"cells": int(c), "eta": float(e)} for c, e in zip(cells, eta, strict=True)]
 
 
 def is_adaptive(path: str | os.PathLike[str]) -> bool:

@@ -42,6 +42,7 @@ from .run import hold_lock
 from .signals import check_stop, saving
 
 if TYPE_CHECKING:
+    from ..simulate.adapt import AdaptiveStep
     from ..simulate.adaptive_time import AdaptiveState, Segment
     from .run import RunPlan
 
@@ -81,6 +82,15 @@ def execute_adaptive(plan: RunPlan, *, progress: bool = True) -> list[Segment]:
             keep=start.segment if start is not None else 0,
         )
         done: list[AdaptiveState] = [start] if start is not None else []
+        cells: list[int] = []
+        eta: list[float] = []
+
+        def on_pass(step: AdaptiveStep) -> None:  # a whole run before the run
+            cells.append(step.problem.mesh.n_cells)
+            eta.append(step.eta)
+            with saving():
+                h5.passes(cells, eta)
+            check_stop()
 
         bar = _bar(progress, len(cfg.problem.time.t), start.first if start is not None else 0)
 
@@ -104,6 +114,7 @@ def execute_adaptive(plan: RunPlan, *, progress: bool = True) -> list[Segment]:
                 solver=plan.solver,
                 start=start,
                 on_segment=on_segment,
+                on_pass=on_pass,
                 keep=False,
             )
             h5.close(completed=True)
@@ -168,7 +179,7 @@ def _finish(plan: RunPlan) -> list[Segment]:
         write_adaptive_series,
         write_adaptive_xdmf,
     )
-    from ..post.adaptive_stream import read_adaptive
+    from ..post.adaptive_stream import read_adaptive, read_passes
     from ..post.outputs import FIGURE_NAMES_ADAPTIVE as FIGURE_NAMES
     from ..post.outputs import _use_agg
     from ..post.results import FORMAT, SUMMARY_NAME, jsonable
@@ -176,6 +187,7 @@ def _finish(plan: RunPlan) -> list[Segment]:
 
     cfg, out = plan.cfg, plan.out
     segments = read_adaptive(cfg.problem, out / STREAM_NAME, solver=plan.meta["solver"])
+    passes = read_passes(out / STREAM_NAME)
     files = [STREAM_NAME, SUMMARY_NAME]
     if cfg.output.figures:
         _use_agg()
@@ -201,7 +213,7 @@ def _finish(plan: RunPlan) -> list[Segment]:
             "inputs_sha256": plan.meta["inputs_sha256"],
         },
         "solver": plan.meta["solver"],
-        "adaptive": adaptive_summary(segments, plan.meta["adapt"]),
+        "adaptive": {**adaptive_summary(segments, plan.meta["adapt"]), "passes": passes},
         "outputs": {
             "levels": len(cfg.problem.time.t),
             "wear_max_final": float(np.max(segments[-1].result.wear[-1], initial=0.0)),

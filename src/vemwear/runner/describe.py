@@ -123,10 +123,13 @@ def _adapt_rows(cfg: Config) -> Rows:
     bound += [f"target_error {a.target_error:g}"] if a.target_error is not None else []
     bound += [f"max_level {a.max_level}"] if a.max_level is not None else []
     coarsen = f"coarsen {a.coarsen:g} of eta^2" if a.coarsen > 0 else "no coarsening"
+    first = f"{a.passes - 1} whole runs make the mesh, " if a.passes > 1 else ""
+    steps = len(cfg.problem.time.t) - 1
+    when = f"mesh change every {a.every} levels" if a.every < steps else "no mesh change in time"
     return [
         (
             "adapt",
-            f"residual estimator, mesh change every {a.every} levels, theta {a.theta:g}, "
+            f"{a.estimator} estimator, {first}{when}, theta {a.theta:g}, "
             f"{', '.join(bound)}, {coarsen}",
         )
     ]

@@ -277,7 +277,7 @@ def prepare_run(
 
 #: ``[adapt]`` settings added after checkpoints of adaptive runs were first written, with
 #: the value that does what a run made before they existed did
-_ADAPT_SINCE = {"estimator": "residual", "transfer": "linear"}
+_ADAPT_SINCE = {"estimator": "residual", "transfer": "linear", "passes": 1}
 
 
 def _adapt_settings(stored: dict[str, Any] | None) -> dict[str, Any] | None:

@@ -30,15 +30,14 @@ from numpy.typing import NDArray
 from ..mesh.adapt import CellTree, dorfler_marking
 from ..mesh.curves import OFF_CHORD, BoundaryCurve
 from ..mesh.polymesh import Mesh
-from .adaptive_time import AdaptSettings
 from .estimate import Estimate, estimate_last
 from .loop import Result, simulate
-from .mesh_change import change_mesh, change_mesh_for_wear
+from .mesh_change import AdaptSettings, change_mesh, change_mesh_for_wear
 from .options import SolverOptions
 from .problem import Problem
 from .wear_estimate import wear_indicators
 
-__all__ = ["AdaptiveStep", "adapt", "passes"]
+__all__ = ["AdaptiveStep", "adapt", "adapt_passes"]
 
 
 @dataclass(frozen=True)
@@ -147,17 +146,18 @@ def adapt(
         1, theta, 0.0, max_cells, target_error, max_level, max_difference, curved,
         estimator, transfer,
     )  # fmt: skip
-    return passes(problem, cfg, max_passes, solver)[0]
+    return adapt_passes(problem, cfg, max_passes, solver)[0]
 
 
-def passes(
+def adapt_passes(
     problem: Problem,
     cfg: AdaptSettings,
     n: int,
     solver: SolverOptions | str = "newton",
     *,
     refine_last: bool = False,
-) -> tuple[list[AdaptiveStep], Problem]:
+    curve: BoundaryCurve | None = None,
+) -> tuple[list[AdaptiveStep], Problem, CellTree]:
     """At most ``n`` passes of the loop of :func:`adapt` with the settings ``cfg`` (its
     ``every`` and ``coarsen`` are not used).
 
@@ -173,6 +173,9 @@ def passes(
         As for :func:`~vemwear.simulate.loop.simulate`.
     refine_last : bool
         Refine after the ``n``-th pass too (the mesh of a run that follows the passes).
+    curve : BoundaryCurve, optional
+        With ``cfg.curved``: the curve new boundary vertices go onto (default: the one
+        through the boundary vertices of ``problem``'s mesh).
 
     Returns
     -------
@@ -182,13 +185,16 @@ def passes(
         The problem on the mesh that the passes end with: the last pass's, or, with
         ``refine_last``, the one refined after it (the last pass's when nothing was
         refined, the target was reached or ``max_cells`` stopped it).
+    tree : CellTree
+        The levels and families of the cells of ``next``'s mesh.
     """
     if cfg.estimator == "wear" and problem.order != 1:
         raise ValueError("estimator = 'wear' is implemented for k = 1")
     mesh = problem.mesh
     assert isinstance(mesh, Mesh)
     tree = CellTree.initial(mesh.n_cells)
-    curve = BoundaryCurve.of(mesh) if cfg.curved else None
+    if curve is None and cfg.curved:
+        curve = BoundaryCurve.of(mesh)
     parts = tuple(pc.part for pc in problem.parts)
     move = (parts, OFF_CHORD if curve is not None and curve.any else 0.0, cfg.transfer == "cubic")
     steps: list[AdaptiveStep] = []
@@ -221,4 +227,4 @@ def passes(
             break
         mesh, tree = new, new_tree
         pr = dataclasses.replace(problem, mesh=mesh)
-    return steps, pr
+    return steps, pr, tree

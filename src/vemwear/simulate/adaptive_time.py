@@ -36,10 +36,11 @@ from ..mesh.adapt import CellTree
 from ..mesh.curves import OFF_CHORD, BoundaryCurve
 from ..mesh.polymesh import Mesh
 from ..solvers.backends import reusing_factorizations
+from .adapt import AdaptiveStep, adapt_passes
 from .estimate import Estimate, estimate_last
 from .levels import run_levels
 from .loop import MemorySink, Result
-from .mesh_change import change_mesh, change_mesh_for_wear
+from .mesh_change import AdaptSettings, change_mesh, change_mesh_for_wear
 from .options import SolverOptions
 from .problem import Problem
 from .stream import LoopState, StoragePlan
@@ -87,85 +88,6 @@ class Segment:
 
 
 @dataclass(frozen=True)
-class AdaptSettings:
-    """When and how the mesh of an adaptive run changes (the ``[adapt]`` table).
-
-    Attributes
-    ----------
-    every : int
-        Levels between mesh changes (>= 1).
-    theta : float
-        Dörfler's bulk fraction of the refinement, in (0, 1].
-    coarsen : float
-        The fraction of eta^2 the coarsened cells may carry, in [0, 1 - theta); 0: no
-        coarsening.
-    max_cells : int, optional
-        No refinement that would give more cells (coarsening still applies).
-    target_error : float, optional
-        No refinement at a level whose estimate eta is at most this (coarsening still
-        applies).
-    max_level : int, optional
-        Cells of this level are not refined further.
-    max_difference : int
-        Largest level difference of neighbours (>= 1).
-    curved : bool
-        Put the new vertices of curved boundary edges onto the curve of the initial
-        mesh's boundary (:mod:`vemwear.mesh.curves`); straight edges are not affected.
-    estimator : {"residual", "wear"}
-        What marks the cells: the residual estimator (:mod:`.estimate`), or the error of
-        the wear profile predicted at the final time (:mod:`.wear_estimate`, k = 1), with
-        which a mesh change refines, round after round on the predicted profile, until
-        that error has fallen as one uniform refinement would make it fall.
-    transfer : {"linear", "cubic"}
-        How the wear moves to a new mesh (:func:`~vemwear.contact.transfer.
-        transfer_along_contact`): the piecewise linear function along Gamma_C, or the
-        monotone piecewise cubic through its nodal values (k = 1).
-
-    Raises
-    ------
-    ValueError
-        Naming the setting (its message starts with the key's name).
-    """
-
-    every: int
-    theta: float = 0.5
-    coarsen: float = 0.0
-    max_cells: int | None = None
-    target_error: float | None = None
-    max_level: int | None = None
-    max_difference: int = 1
-    curved: bool = True
-    estimator: str = "residual"
-    transfer: str = "linear"
-
-    def __post_init__(self) -> None:
-        theta, coarsen = self.theta, self.coarsen
-        if int(self.every) < 1:
-            raise ValueError(f"every must be at least 1 level, got {self.every}")
-        if not 0.0 < theta <= 1.0:
-            raise ValueError(f"theta must lie in (0, 1], got {theta}")
-        if not 0.0 <= coarsen < 1.0:
-            raise ValueError(f"coarsen must lie in [0, 1), got {coarsen}")
-        if coarsen >= 1.0 - theta + 1e-12 and coarsen > 0:
-            raise ValueError(
-                f"coarsen = {coarsen} and theta = {theta} overlap: the cells to coarsen "
-                "would carry part of the bulk marked for refinement (need coarsen < 1 - theta)"
-            )
-        if self.max_cells is not None and self.max_cells < 1:
-            raise ValueError(f"max_cells must be at least 1, got {self.max_cells}")
-        if self.target_error is not None and not self.target_error > 0:
-            raise ValueError(f"target_error must be positive, got {self.target_error}")
-        if self.max_level is not None and self.max_level < 0:
-            raise ValueError(f"max_level must be >= 0, got {self.max_level}")
-        if self.max_difference < 1:
-            raise ValueError(f"max_difference must be at least 1, got {self.max_difference}")
-        if self.estimator not in ("residual", "wear"):
-            raise ValueError(f"estimator must be 'residual' or 'wear', got {self.estimator!r}")
-        if self.transfer not in ("linear", "cubic"):
-            raise ValueError(f"transfer must be 'linear' or 'cubic', got {self.transfer!r}")
-
-
-@dataclass(frozen=True)
 class AdaptiveState:
     """What an adaptive run carries from one segment to the next.
 
@@ -208,9 +130,11 @@ def simulate_adaptive(
     curved: bool = True,
     estimator: str = "residual",
     transfer: str = "linear",
+    passes: int = 1,
     solver: SolverOptions | str = "newton",
     start: AdaptiveState | None = None,
     on_segment: Callable[[Segment, AdaptiveState | None], None] | None = None,
+    on_pass: Callable[[AdaptiveStep], None] | None = None,
     keep: bool = True,
 ) -> list[Segment]:
     """Run the scheme on a mesh that adapts every ``every`` levels (module docstring).
@@ -236,8 +160,9 @@ def simulate_adaptive(
     curved : bool
         New boundary vertices of curved boundary parts go onto the curve through the
         initial mesh's boundary vertices (:class:`~vemwear.mesh.curves.BoundaryCurve`).
-    estimator, transfer : str
-        As in :class:`AdaptSettings`.
+    estimator, transfer, passes : str, str, int
+        As in :class:`AdaptSettings`: with ``passes > 1`` the run starts on the mesh
+        refined after ``passes - 1`` whole runs (not when it goes on from ``start``).
     solver : SolverOptions or str
         As for :func:`~vemwear.simulate.loop.simulate`.
     start : AdaptiveState, optional
@@ -246,6 +171,8 @@ def simulate_adaptive(
     on_segment : callable, optional
         Called with every finished segment and the state the run goes on from (None
         after the last segment).
+    on_pass : callable, optional
+        Called with every whole run before the run (``passes > 1``).
     keep : bool
         Return the segments (False: an empty list; ``on_segment`` has them).
 
@@ -267,6 +194,7 @@ def simulate_adaptive(
         curved,
         estimator,
         transfer,
+        passes,
     )
     if problem.order != 1 and (estimator, transfer) != ("residual", "linear"):
         raise ValueError("estimator = 'wear' and transfer = 'cubic' are implemented for k = 1")
@@ -279,6 +207,14 @@ def simulate_adaptive(
     n0, k = 0, 0
     if start is not None:
         n0, k, mesh, tree, w = start.first, start.segment, start.mesh, start.tree, start.wear
+    elif cfg.passes > 1:  # whole runs first, each refining the mesh for the next
+        steps, pr, tree = adapt_passes(
+            problem, cfg, cfg.passes - 1, opts, refine_last=True, curve=curve
+        )
+        mesh = pr.mesh
+        for step in steps:
+            if on_pass is not None:
+                on_pass(step)
     # a mesh that stays (max_cells reached, nothing marked) keeps its factorization for the
     # next segment: the same matrix, so the same factors and bitwise the same levels
     with reusing_factorizations() as forget:

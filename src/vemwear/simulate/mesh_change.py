@@ -1,4 +1,5 @@
-"""One mesh change of an adaptive run: coarsen and refine by the residual estimator's
+"""How and when the mesh of an adaptive run changes (:class:`AdaptSettings`, the
+``[adapt]`` table), and one mesh change: coarsen and refine by the residual estimator's
 indicators (:func:`change_mesh`), or refine, round after round, by the wear indicator
 of a wear profile (:func:`change_mesh_for_wear`). Shared by the runs whose mesh changes
 in time (:mod:`.adaptive_time`) and the loop of whole runs (:mod:`.adapt`)."""
@@ -6,7 +7,7 @@ in time (:mod:`.adaptive_time`) and the loop of whole runs (:mod:`.adapt`)."""
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,10 +19,93 @@ from ..mesh.curves import BoundaryCurve
 from ..mesh.polymesh import Mesh
 from .wear_estimate import wear_indicators
 
-if TYPE_CHECKING:
-    from .adaptive_time import AdaptSettings
+__all__ = ["WEAR_ROUNDS", "AdaptSettings", "change_mesh", "change_mesh_for_wear"]
 
-__all__ = ["WEAR_ROUNDS", "change_mesh", "change_mesh_for_wear"]
+
+@dataclass(frozen=True)
+class AdaptSettings:
+    """When and how the mesh of an adaptive run changes (the ``[adapt]`` table).
+
+    Attributes
+    ----------
+    every : int
+        Levels between mesh changes (>= 1).
+    theta : float
+        Dörfler's bulk fraction of the refinement, in (0, 1].
+    coarsen : float
+        The fraction of eta^2 the coarsened cells may carry, in [0, 1 - theta); 0: no
+        coarsening.
+    max_cells : int, optional
+        No refinement that would give more cells (coarsening still applies).
+    target_error : float, optional
+        No refinement at a level whose estimate eta is at most this (coarsening still
+        applies).
+    max_level : int, optional
+        Cells of this level are not refined further.
+    max_difference : int
+        Largest level difference of neighbours (>= 1).
+    curved : bool
+        Put the new vertices of curved boundary edges onto the curve of the initial
+        mesh's boundary (:mod:`vemwear.mesh.curves`); straight edges are not affected.
+    estimator : {"residual", "wear"}
+        What marks the cells: the residual estimator (:mod:`.estimate`), or the error of
+        the wear profile predicted at the final time (:mod:`.wear_estimate`, k = 1), with
+        which a mesh change refines, round after round on the predicted profile, until
+        that error has fallen as one uniform refinement would make it fall.
+    transfer : {"linear", "cubic"}
+        How the wear moves to a new mesh (:func:`~vemwear.contact.transfer.
+        transfer_along_contact`): the piecewise linear function along Gamma_C, or the
+        monotone piecewise cubic through its nodal values (k = 1).
+    passes : int
+        Whole runs before the run (>= 1): the run starts on the mesh refined after
+        ``passes - 1`` solves of the whole time interval, each marked by the estimator
+        at its final level (:func:`~vemwear.simulate.adapt.adapt_passes`); 1: none.
+
+    Raises
+    ------
+    ValueError
+        Naming the setting (its message starts with the key's name).
+    """
+
+    every: int
+    theta: float = 0.5
+    coarsen: float = 0.0
+    max_cells: int | None = None
+    target_error: float | None = None
+    max_level: int | None = None
+    max_difference: int = 1
+    curved: bool = True
+    estimator: str = "residual"
+    transfer: str = "linear"
+    passes: int = 1
+
+    def __post_init__(self) -> None:
+        theta, coarsen = self.theta, self.coarsen
+        if int(self.every) < 1:
+            raise ValueError(f"every must be at least 1 level, got {self.every}")
+        if not 0.0 < theta <= 1.0:
+            raise ValueError(f"theta must lie in (0, 1], got {theta}")
+        if not 0.0 <= coarsen < 1.0:
+            raise ValueError(f"coarsen must lie in [0, 1), got {coarsen}")
+        if coarsen >= 1.0 - theta + 1e-12 and coarsen > 0:
+            raise ValueError(
+                f"coarsen = {coarsen} and theta = {theta} overlap: the cells to coarsen "
+                "would carry part of the bulk marked for refinement (need coarsen < 1 - theta)"
+            )
+        if self.max_cells is not None and self.max_cells < 1:
+            raise ValueError(f"max_cells must be at least 1, got {self.max_cells}")
+        if self.target_error is not None and not self.target_error > 0:
+            raise ValueError(f"target_error must be positive, got {self.target_error}")
+        if self.max_level is not None and self.max_level < 0:
+            raise ValueError(f"max_level must be >= 0, got {self.max_level}")
+        if self.max_difference < 1:
+            raise ValueError(f"max_difference must be at least 1, got {self.max_difference}")
+        if self.estimator not in ("residual", "wear"):
+            raise ValueError(f"estimator must be 'residual' or 'wear', got {self.estimator!r}")
+        if int(self.passes) < 1:
+            raise ValueError(f"passes must be at least 1, got {self.passes}")
+        if self.transfer not in ("linear", "cubic"):
+            raise ValueError(f"transfer must be 'linear' or 'cubic', got {self.transfer!r}")
 
 
 def change_mesh(
