@@ -31,7 +31,7 @@ class Adapt(Section):
         description="what marks the cells: 'residual' (the residual estimator of "
         "docs/method.md section 11, k = 1 and 2) or 'wear' (the error of the wear profile "
         "predicted at the final time along Gamma_C, k = 1; a mesh change refines until it "
-        "has fallen as one uniform refinement would make it fall)",
+        "has fallen as one uniform refinement would make it fall, or to target_error)",
     )
     every: int | None = Field(
         None,
@@ -51,8 +51,9 @@ class Adapt(Section):
     target_error: float | None = Field(
         None,
         gt=0,
-        description="no refinement at a mesh change whose estimate eta is at most this; this "
-        "or max_cells is required",
+        description="no refinement at a mesh change whose estimate eta is at most this (for "
+        "'wear': a mesh change refines until eta is at most this); this or max_cells is "
+        "required",
     )
     coarsen: bool = Field(
         False, description="also coarsen (merge) the families of cells of small indicators"

@@ -39,7 +39,7 @@ class AdaptSettings:
         No refinement that would give more cells (coarsening still applies).
     target_error : float, optional
         No refinement at a level whose estimate eta is at most this (coarsening still
-        applies).
+        applies); for the wear, a mesh change refines until eta is at most this.
     max_level : int, optional
         Cells of this level are not refined further.
     max_difference : int
@@ -51,7 +51,8 @@ class AdaptSettings:
         What marks the cells: the residual estimator (:mod:`.estimate`), or the error of
         the wear profile predicted at the final time (:mod:`.wear_estimate`, k = 1), with
         which a mesh change refines, round after round on the predicted profile, until
-        that error has fallen as one uniform refinement would make it fall.
+        that error has fallen as one uniform refinement would make it fall, or to
+        ``target_error``.
     transfer : {"linear", "cubic"}
         How the wear moves to a new mesh (:func:`~vemwear.contact.transfer.
         transfer_along_contact`): the piecewise linear function along Gamma_C, or the
