@@ -229,10 +229,11 @@ def test_the_loop_refuses_an_unknown_estimator_and_the_wear_for_k_2() -> None:
 
 
 def test_a_config_with_passes_makes_the_mesh_by_whole_runs_and_resumes_bitwise(tmp_path) -> None:
-    """``[adapt] passes = 2`` on the shipped punch: ``vemwear run`` solves the whole run
-    once on the 24 x 8 mesh, refines it for that run's wear at T, then runs with mesh
-    changes every 8 levels; its meshes and wear equal the API's bitwise, summary.json
-    lists the pass, and a run killed after a mesh change resumes to the same arrays."""
+    """``punch_passes.toml``: ``vemwear run`` solves the whole run on the shipped 24 x 8
+    mesh and on the meshes refined for each run's wear at T until the target, then runs
+    on the last mesh; its mesh and wear equal the API's loop bitwise and summary.json
+    lists the passes. With mesh changes in time too (``every = 4``) a run killed after a
+    mesh change resumes to the same arrays."""
     import dataclasses
     import json
     import signal
@@ -244,16 +245,11 @@ def test_a_config_with_passes_makes_the_mesh_by_whole_runs_and_resumes_bitwise(t
     from conftest import run_until_segments, segments_done
     from vemwear.config import load_config
     from vemwear.examples import config_path
+    from vemwear.simulate import adapt
 
-    text = config_path("punch").read_text() + (
-        '\n[adapt]\nestimator = "wear"\ntransfer = "cubic"\npasses = 2\nevery = 4\n'
-        "max_cells = 4000\n"
-    )
-    (tmp_path / "punch.toml").write_text(text)
-    (tmp_path / "punch.msh").write_bytes(config_path("punch").with_suffix(".msh").read_bytes())
-    config = tmp_path / "punch.toml"
+    shipped = config_path("punch_passes")
 
-    def cli(out, *extra):
+    def cli(config, out, *extra):
         cmd = [sys.executable, "-m", "vemwear", "run", str(config), "-o", str(out)]
         return [*cmd, "--no-progress", *extra]
 
@@ -261,10 +257,35 @@ def test_a_config_with_passes_makes_the_mesh_by_whole_runs_and_resumes_bitwise(t
         with h5py.File(path, "r") as f:
             return {n: {k: f[n][k][()] for k in f[n]} for n in f if n.startswith("mesh_")}
 
-    done = subprocess.run(cli(tmp_path / "ref"), capture_output=True, text=True, timeout=300)
+    done = subprocess.run(cli(shipped, tmp_path / "ship"), capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    summary = json.loads((tmp_path / "ref" / "summary.json").read_text())
-    assert [p["cells"] for p in summary["adaptive"]["passes"]] == [192]
+    summary = json.loads((tmp_path / "ship" / "summary.json").read_text())
+    passes = summary["adaptive"]["passes"]
+    cfg = load_config(shipped)
+    a = cfg.adapt
+    assert a is not None and a.passes == 4 and a.target_error is not None
+    steps = adapt(
+        cfg.problem,
+        estimator=a.estimator,
+        transfer=a.transfer,
+        max_passes=a.passes,
+        target_error=a.target_error,
+        max_cells=a.max_cells,
+    )
+    # the passes before the run are the loop's, and the run is its last pass
+    assert [p["cells"] for p in passes] == [s.problem.mesh.n_cells for s in steps[:-1]]
+    assert [p["eta"] for p in passes] == [s.eta for s in steps[:-1]]
+    assert passes[0]["cells"] == 192 and passes[-1]["eta"] > a.target_error
+    (g,) = groups(tmp_path / "ship" / "result.h5").values()
+    assert np.array_equal(g["points"], steps[-1].problem.mesh.points)
+    assert np.array_equal(g["wear"][-1], steps[-1].result.wear[-1])
+
+    text = shipped.read_text() + "\n"
+    (tmp_path / "punch.msh").write_bytes(shipped.with_name("punch.msh").read_bytes())
+    config = tmp_path / "punch.toml"  # two passes, then mesh changes every 4 levels
+    config.write_text(text.replace("passes = 4", "passes = 2\nevery = 4"))
+    done = subprocess.run(cli(config, tmp_path / "ref"), capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
     reference = groups(tmp_path / "ref" / "result.h5")
     cfg = load_config(config)
     assert cfg.adapt is not None and cfg.adapt.passes == 2
@@ -276,16 +297,17 @@ def test_a_config_with_passes_makes_the_mesh_by_whole_runs_and_resumes_bitwise(t
         assert np.array_equal(g["wear"], seg.result.wear[rows])
 
     out = tmp_path / "out"
-    proc = run_until_segments(cli(out), out, 3)
+    proc = run_until_segments(cli(config, out), out, 3)
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=30)
     assert 3 <= segments_done(out) < len(reference)
-    again = subprocess.run(cli(out, "--resume"), capture_output=True, text=True, timeout=300)
+    again = subprocess.run(cli(config, out, "--resume"), capture_output=True, text=True)
     assert again.returncode == 0, again.stderr
     got = groups(out / "result.h5")
     assert got.keys() == reference.keys()
     for name, g in reference.items():
-        for k, v in g.items():
-            assert np.array_equal(got[name][k], v), (name, k)
+        for key, v in g.items():
+            assert np.array_equal(got[name][key], v), (name, key)
+    ref_summary = json.loads((tmp_path / "ref" / "summary.json").read_text())
     resumed = json.loads((out / "summary.json").read_text())
-    assert resumed["adaptive"]["passes"] == summary["adaptive"]["passes"]
+    assert resumed["adaptive"]["passes"] == ref_summary["adaptive"]["passes"]
