@@ -30,7 +30,10 @@ import time
 from pathlib import Path
 
 #: Libraries a run imports only when it uses them.
-OPTIONAL = ("matplotlib", "meshio", "xarray", "dask", "pandas", "pyamg", "scipy.spatial")
+OPTIONAL = (
+    *("matplotlib", "certifi", "meshio", "xarray", "dask", "pandas", "pyamg", "scipy.spatial"),
+    *("vemwear.simulate.adaptive_time", "vemwear.simulate.cycles", "vemwear.studies"),
+)
 
 MODULES = """
 import sys

@@ -145,7 +145,13 @@ def _voigt(mat: Material) -> np.ndarray:
     return elasticity_matrix(mat)
 
 
-LAZY_IN_A_RUN = ("matplotlib", "meshio", "xarray", "dask", "pandas", "scipy.spatial")
+LAZY_IN_A_RUN = (
+    *("matplotlib", "certifi", "meshio", "xarray", "dask", "pandas", "pyamg", "scipy.spatial"),
+    # the library's modules of the other kinds of runs and of the outputs turned off
+    *("vemwear.simulate.adaptive_time", "vemwear.runner.adaptive", "vemwear.post.adaptive"),
+    *("vemwear.simulate.cycles", "vemwear.runner.cycles", "vemwear.studies"),
+    *("vemwear.post.plots", "vemwear.post.maps", "vemwear.post.vtk", "vemwear.post.xdmf"),
+)
 
 
 def _imported(code: str, *args: str) -> set[str]:
@@ -168,8 +174,10 @@ def test_import_vemwear_loads_no_numerical_library() -> None:
 
 
 def test_a_run_imports_no_library_it_does_not_use(tmp_path: Path) -> None:
-    """``vemwear run`` without figures, ParaView output or a mesh file: no plotting,
-    mesh-file, study or point-location library is imported."""
+    """``vemwear run`` without figures, ParaView output, a mesh file, ``[adapt]`` or
+    cycle jumps: no plotting, mesh-file, study, multigrid or point-location library is
+    imported (nor certifi, which matplotlib loads), and none of the library's modules of
+    adaptive or cycle-jump runs, studies, figures or ParaView files."""
     cfg = tmp_path / "c.toml"
     cfg.write_text(small_config("lazy", divisions=(8, 4), steps=4))
     code = (
