@@ -60,6 +60,7 @@ def mark(name):
     marks.append((name, time.perf_counter()))
 import numpy, scipy.sparse.linalg; mark("floor imports")
 import vemwear.cli.main; mark("vemwear.cli")
+vemwear.cli.main.command_environment()  # as the command's process has it
 import vemwear.simulate, vemwear.solvers; mark("library modules")
 import pydantic, pydantic.fields, pydantic.functional_validators, pydantic.main
 mark("pydantic")

@@ -189,6 +189,28 @@ def test_a_run_imports_no_library_it_does_not_use(tmp_path: Path) -> None:
     assert not held & set(LAZY_IN_A_RUN)
 
 
+@pytest.mark.parametrize("given", [None, "logfire"])
+def test_the_command_turns_pydantic_plugins_off_unless_told(given: str | None) -> None:
+    """The ``vemwear`` process spares pydantic's search of plugins (the entry points of
+    every installed distribution) at its first validation; a value set stays."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import os, sys\nfrom vemwear.cli.main import entry\nsys.argv = ['vemwear', '--version']\n"
+        "try:\n    entry()\nexcept SystemExit:\n"
+        "    print('PLUGINS:', os.environ.get('PYDANTIC_DISABLE_PLUGINS'))"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "PYDANTIC_DISABLE_PLUGINS"}
+    if given is not None:
+        env["PYDANTIC_DISABLE_PLUGINS"] = given
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    assert out.stdout.strip().splitlines()[-1] == f"PLUGINS: {given or '__all__'}"
+
+
 @pytest.mark.parametrize("family", ["hexahedra", "tetrahedra", "voronoi3d", "prisms"])
 def test_coupled_vertices_is_the_block_count_of_k(family: str) -> None:
     """The plan's count of coupled vertices is the number of nonzero 3 x 3 blocks per
