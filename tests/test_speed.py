@@ -145,7 +145,13 @@ def _voigt(mat: Material) -> np.ndarray:
     return elasticity_matrix(mat)
 
 
-LAZY_IN_A_RUN = ("matplotlib", "meshio", "xarray", "dask", "pandas", "scipy.spatial")
+LAZY_IN_A_RUN = (
+    *("matplotlib", "certifi", "meshio", "xarray", "dask", "pandas", "pyamg", "scipy.spatial"),
+    # the library's modules of the other kinds of runs and of the outputs turned off
+    *("vemwear.simulate.adaptive_time", "vemwear.runner.adaptive", "vemwear.post.adaptive"),
+    *("vemwear.simulate.cycles", "vemwear.runner.cycles", "vemwear.studies"),
+    *("vemwear.post.plots", "vemwear.post.maps", "vemwear.post.vtk", "vemwear.post.xdmf"),
+)
 
 
 def _imported(code: str, *args: str) -> set[str]:
@@ -168,8 +174,10 @@ def test_import_vemwear_loads_no_numerical_library() -> None:
 
 
 def test_a_run_imports_no_library_it_does_not_use(tmp_path: Path) -> None:
-    """``vemwear run`` without figures, ParaView output or a mesh file: no plotting,
-    mesh-file, study or point-location library is imported."""
+    """``vemwear run`` without figures, ParaView output, a mesh file, ``[adapt]`` or
+    cycle jumps: no plotting, mesh-file, study, multigrid or point-location library is
+    imported (nor certifi, which matplotlib loads), and none of the library's modules of
+    adaptive or cycle-jump runs, studies, figures or ParaView files."""
     cfg = tmp_path / "c.toml"
     cfg.write_text(small_config("lazy", divisions=(8, 4), steps=4))
     code = (
@@ -179,6 +187,28 @@ def test_a_run_imports_no_library_it_does_not_use(tmp_path: Path) -> None:
     held = _imported(code, str(cfg), str(tmp_path / "out"))
     assert {"numpy", "scipy", "h5py"} <= held  # the run ran and streamed its levels
     assert not held & set(LAZY_IN_A_RUN)
+
+
+@pytest.mark.parametrize("given", [None, "logfire"])
+def test_the_command_turns_pydantic_plugins_off_unless_told(given: str | None) -> None:
+    """The ``vemwear`` process spares pydantic's search of plugins (the entry points of
+    every installed distribution) at its first validation; a value set stays."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import os, sys\nfrom vemwear.cli.main import entry\nsys.argv = ['vemwear', '--version']\n"
+        "try:\n    entry()\nexcept SystemExit:\n"
+        "    print('PLUGINS:', os.environ.get('PYDANTIC_DISABLE_PLUGINS'))"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "PYDANTIC_DISABLE_PLUGINS"}
+    if given is not None:
+        env["PYDANTIC_DISABLE_PLUGINS"] = given
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    assert out.stdout.strip().splitlines()[-1] == f"PLUGINS: {given or '__all__'}"
 
 
 @pytest.mark.parametrize("family", ["hexahedra", "tetrahedra", "voronoi3d", "prisms"])

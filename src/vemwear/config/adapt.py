@@ -12,13 +12,15 @@ run; stored levels it does not keep), each in one line naming the key.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from pydantic import Field, model_validator
 
-from ..simulate.adaptive_time import AdaptSettings
 from .errors import ConfigError, at, error
 from .sections import Section
+
+if TYPE_CHECKING:
+    from ..simulate.adaptive_time import AdaptSettings
 
 __all__ = ["Adapt", "adapt_settings"]
 
@@ -160,6 +162,8 @@ def adapt_settings(
             "overlap: the cells to coarsen would carry part of the bulk marked for refinement "
             "(need coarsen_fraction < 1 - theta)"
         )
+    from ..simulate.adaptive_time import AdaptSettings  # an adaptive run's module only
+
     with at(src, "[adapt]", raw.get("adapt", {})):
         return AdaptSettings(
             every=a.every if a.every is not None else max(levels - 1, 1),

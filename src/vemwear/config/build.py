@@ -23,7 +23,7 @@ import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,8 +34,6 @@ from ..mesh.boundary3d import select_parts3d
 from ..mesh.io3d import mesh_file_dim, read_mesh3d
 from ..mesh.polyhedra import Mesh3D
 from ..simulate import Problem, SolverOptions, TimeGrid
-from ..simulate.adaptive_time import AdaptSettings
-from ..simulate.cycles import CycleJump
 from ..solvers import resolve_backend
 from ..vem import Material
 from . import schema as s
@@ -45,6 +43,10 @@ from .errors import ConfigError, at, from_library, from_validation
 from .fields import FieldExpression, library_data, velocity_data
 from .mesh_forms import MeshFile, mesh_family
 from .parts import Roles, contact_law, contact_parts, roles
+
+if TYPE_CHECKING:
+    from ..simulate.adaptive_time import AdaptSettings
+    from ..simulate.cycles import CycleJump
 
 __all__ = ["Config", "OutputOptions", "Sizes", "load_config", "parse_config"]
 
@@ -494,6 +496,8 @@ def parse_config(
                 f"{src}: [time] cycle_jump: period = {cj.period:g} but the time grid (one "
                 f"cycle) ends at T = {grid.T:g}; make them equal"
             )
+        from ..simulate.cycles import CycleJump  # a cycle-jump run's module only
+
         with at(src, "[time]", raw["time"], key="cycle_jump"):
             cycles = CycleJump(cj.cycles, cj.jump, cj.max_increment)
     return Config(path, raw, title, problem, solver, output, mesh_source, c, cycles, adapt)

@@ -83,6 +83,23 @@ def _early(h5py: Any) -> Any:
     return dcpl
 
 
+def _read_whole(h5py: Any, f: Any, name: str) -> NDArray[Any]:
+    """The dataset ``name`` of the open file ``f``, read whole, as ``f[name][()]``.
+
+    Through HDF5's own calls: a high-level ``Dataset`` costs about 0.3 ms to open, more
+    than reading the small arrays of a run (of a 32 x 16 run's 34 arrays, a tenth of
+    its wall time). Arrays of h5py's special types (object dtype) take the high-level
+    path.
+    """
+    ds = h5py.h5d.open(f.id, name.encode())
+    if ds.dtype.kind == "O":
+        return np.asarray(f[name][()])
+    out = np.empty(ds.shape, dtype=ds.dtype)
+    if out.size:
+        ds.read(h5py.h5s.ALL, h5py.h5s.ALL, out)
+    return np.asarray(out[()]) if out.ndim == 0 else out
+
+
 class H5Sink:
     """Stream a run's levels into ``result.h5``.
 
@@ -284,7 +301,7 @@ def read_stream(
         old = "format" not in f
         back = {v: k for k, v in RENAMED_V1.items()} if old else {}
         keys = names if names is not None else tuple(f.keys())
-        out = {k: np.asarray(f[back.get(k, k)][()]) for k in keys}
+        out = {k: _read_whole(h5py, f, back.get(k, k)) for k in keys}
     out = {k: np.char.decode(v, "utf-8") if v.dtype.kind == "S" else v for k, v in out.items()}
     if old and names is None:
         return upgrade_arrays(out)
@@ -305,8 +322,11 @@ def result_from_stream(
 def stream_bytes(path: str | os.PathLike[str]) -> int:
     """Bytes the datasets of a ``result.h5`` take in memory."""
     h5py = _h5py()
-    with h5py.File(path, "r") as f:
-        return int(sum(f[k].size * f[k].dtype.itemsize for k in f))
+    with h5py.File(path, "r") as f:  # HDF5's own calls: see _read_whole
+        datasets = (h5py.h5d.open(f.id, name) for name in f.id)
+        return int(
+            sum(d.get_space().get_simple_extent_npoints() * d.dtype.itemsize for d in datasets)
+        )
 
 
 def export_npz(outdir: str | os.PathLike[str], *, force: bool = False) -> Path:
