@@ -149,6 +149,7 @@ LAZY_IN_A_RUN = (
     *("matplotlib", "certifi", "meshio", "xarray", "dask", "pandas", "pyamg", "scipy.spatial"),
     # the library's modules of the other kinds of runs and of the outputs turned off
     *("vemwear.simulate.adaptive_time", "vemwear.runner.adaptive", "vemwear.post.adaptive"),
+    *("vemwear.simulate.mesh_change", "vemwear.simulate.wear_estimate"),
     *("vemwear.simulate.cycles", "vemwear.runner.cycles", "vemwear.studies"),
     *("vemwear.post.plots", "vemwear.post.maps", "vemwear.post.vtk", "vemwear.post.xdmf"),
 )

@@ -2,7 +2,7 @@
 
 :class:`Adapt` declares its keys (the schema of :mod:`vemwear.config.schema` holds it as
 ``ConfigFile.adapt``); :func:`adapt_settings` turns it into the
-:class:`~vemwear.simulate.adaptive_time.AdaptSettings` of
+:class:`~vemwear.simulate.mesh_change.AdaptSettings` of
 :func:`~vemwear.simulate.adaptive_time.simulate_adaptive` and refuses, before anything
 is solved, the settings that contradict each other or that the adaptive path cannot
 honour (a 3D mesh, for which the residual estimator is not implemented; a cycle-jump
@@ -20,7 +20,7 @@ from .errors import ConfigError, at, error
 from .sections import Section
 
 if TYPE_CHECKING:
-    from ..simulate.adaptive_time import AdaptSettings
+    from ..simulate.mesh_change import AdaptSettings
 
 __all__ = ["Adapt", "adapt_settings"]
 
@@ -162,7 +162,7 @@ def adapt_settings(
             "overlap: the cells to coarsen would carry part of the bulk marked for refinement "
             "(need coarsen_fraction < 1 - theta)"
         )
-    from ..simulate.adaptive_time import AdaptSettings  # an adaptive run's module only
+    from ..simulate.mesh_change import AdaptSettings  # an adaptive run's module only
 
     with at(src, "[adapt]", raw.get("adapt", {})):
         return AdaptSettings(

@@ -45,8 +45,8 @@ from .mesh_forms import MeshFile, mesh_family
 from .parts import Roles, contact_law, contact_parts, roles
 
 if TYPE_CHECKING:
-    from ..simulate.adaptive_time import AdaptSettings
     from ..simulate.cycles import CycleJump
+    from ..simulate.mesh_change import AdaptSettings
 
 __all__ = ["Config", "OutputOptions", "Sizes", "load_config", "parse_config"]
 

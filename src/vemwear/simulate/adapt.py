@@ -23,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,10 +33,11 @@ from ..mesh.curves import OFF_CHORD, BoundaryCurve
 from ..mesh.polymesh import Mesh
 from .estimate import Estimate, estimate_last
 from .loop import Result, simulate
-from .mesh_change import AdaptSettings, change_mesh, change_mesh_for_wear
 from .options import SolverOptions
 from .problem import Problem
-from .wear_estimate import wear_indicators
+
+if TYPE_CHECKING:
+    from .mesh_change import AdaptSettings
 
 __all__ = ["AdaptiveStep", "adapt", "adapt_passes"]
 
@@ -142,6 +144,8 @@ def adapt(
         )
     if max_passes < 1:
         raise ValueError(f"max_passes must be at least 1, got {max_passes}")
+    from .mesh_change import AdaptSettings
+
     cfg = AdaptSettings(
         1, theta, 0.0, max_cells, target_error, max_level, max_difference, curved,
         estimator, transfer,
@@ -188,6 +192,10 @@ def adapt_passes(
     tree : CellTree
         The levels and families of the cells of ``next``'s mesh.
     """
+    # an adaptive run's modules only: a run on one mesh does not load them
+    from .mesh_change import change_mesh, change_mesh_for_wear
+    from .wear_estimate import wear_indicators
+
     if cfg.estimator == "wear" and problem.order != 1:
         raise ValueError("estimator = 'wear' is implemented for k = 1")
     mesh = problem.mesh
