@@ -114,7 +114,9 @@ def serial(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[Path, di
     return runs
 
 
-@pytest.mark.parametrize(("case", "ranks"), [("2d", 1), ("2d", 2), ("2d", 4), ("3d", 1), ("3d", 2)])
+@pytest.mark.parametrize(
+    ("case", "ranks"), [("2d", 1), ("2d", 2), ("2d", 4), ("3d", 1), ("3d", 2), ("3d", 4)]
+)
 def test_mpi_run_equals_serial(serial, tmp_path: Path, case: str, ranks: int) -> None:
     cfg, ref = serial[case]
     out = tmp_path / "out"
