@@ -35,6 +35,7 @@ def prolongation(
     tol: float | None = None,
     candidates: int = 12,
     cells: ArrayLike | None = None,
+    vertices: ArrayLike | None = None,
 ) -> sp.csr_matrix:
     """The linear map from coarse vertex values to values at fine points (nested meshes).
 
@@ -61,6 +62,10 @@ def prolongation(
         e.g. the coarse cell of a fine cell around a fine vertex
         (:func:`~vemwear.mesh.locate.nested_cells`). It is tried first; only the points
         it does not hold are searched among the nearest cells.
+    vertices : (n_coarse,) array_like of int, optional
+        The index of the fine point at every coarse vertex, if known
+        (:func:`~vemwear.mesh.locate.match_vertices`): those points take the vertex
+        values without a search, and no other point is a coarse vertex.
 
     Returns
     -------
@@ -87,9 +92,17 @@ def prolongation(
             vals.append(w)
 
     # 1. coarse vertices
-    dist, near = cKDTree(C).query(X, k=1)
-    hit = np.flatnonzero(dist <= tol)
-    add(hit, near[hit], np.ones(len(hit)))
+    if vertices is None:
+        dist, near = cKDTree(C).query(X, k=1)
+        hit = np.flatnonzero(dist <= tol)
+        add(hit, near[hit], np.ones(len(hit)))
+        todo = np.flatnonzero(dist > tol)
+    else:
+        at = np.asarray(vertices, dtype=np.int64).reshape(coarse.n_points)
+        add(at, np.arange(len(at)), np.ones(len(at)))
+        rest = np.ones(q, dtype=bool)
+        rest[at] = False
+        todo = np.flatnonzero(rest)
     # 2. points on a coarse edge or inside a coarse cell
     V, Vn = padded_edges(coarse)  # (nc, nmax), padded with degenerate edges
     nmax = V.shape[1]
@@ -130,7 +143,6 @@ def prolongation(
             )
         return ~(on_edge | inside)
 
-    todo = np.flatnonzero(dist > tol)
     if cells is not None and todo.size:
         hint = np.asarray(cells, dtype=np.int64).reshape(q)[todo]
         known = hint >= 0
