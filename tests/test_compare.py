@@ -208,6 +208,15 @@ def test_errors_many_gives_the_errors_of_each_run(monkeypatch: pytest.MonkeyPatc
             for k in a:
                 assert np.isfinite(a[k][1:]).all(), k
                 np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+    # the secondary variants at t = T only: the same there, NaN before; the rest the same
+    final = cmp.errors_many(runs, secondary="final")
+    for h, f in zip(many, final, strict=True):
+        for k in h.displacement:
+            a, b = h.displacement[k], f.displacement[k]
+            if k in ("H1_coarse", "H1semi_meanvalue"):
+                assert np.isnan(b[:-1]).all() and b[-1] == a[-1], k
+            else:
+                np.testing.assert_array_equal(a, b, err_msg=k)
     with pytest.raises(NonNestedMeshError):
         cmp.errors_many([runs[2], simulate(ex55.problem(5))])
 

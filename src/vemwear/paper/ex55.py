@@ -123,9 +123,11 @@ def _prepare(ctx: Context) -> None:
 
 def _analyse(ctx: Context) -> dict[str, Any]:
     st = ctx.state
-    # all the runs at once: the reference's projection at a level serves every run
+    # all the runs at once: the reference's projection at a level serves every run; the
+    # tables take the secondary variants at t = T only
     names = list(ctx.results)
-    histories = st["comparison"].errors_many([ctx.results[n] for n in names])
+    runs = [ctx.results[n] for n in names]
+    histories = st["comparison"].errors_many(runs, secondary="final")
     tables = error_tables({int(n[1:]): h for n, h in zip(names, histories, strict=True)})
     study = None
     if ctx.params["study"]:

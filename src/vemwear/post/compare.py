@@ -345,7 +345,11 @@ class Comparison:
         return self.errors_many([coarse], levels=levels)[0]
 
     def errors_many(
-        self, runs: Sequence[Solution | Result], *, levels: str = "common"
+        self,
+        runs: Sequence[Solution | Result],
+        *,
+        levels: str = "common",
+        secondary: str = "common",
     ) -> list[ErrorHistory]:
         """:meth:`errors` of several coarse runs, the same numbers, in less time: the
         reference's projection at a level is computed once for all the runs that have
@@ -356,6 +360,10 @@ class Comparison:
         ----------
         runs : sequence of Solution or Result
         levels : {"common", "final"}
+        secondary : {"common", "final"}
+            The secondary displacement variants (``H1_coarse``, ``H1semi_meanvalue``)
+            at the levels of ``levels``, or only at ``t = T`` (NaN at the others; the
+            mean value variant costs a projection on the reference mesh per level).
 
         Returns
         -------
@@ -393,7 +401,9 @@ class Comparison:
             for c, p in zip(sols, found, strict=True)
         ]
         block = max(1, _BLOCK // r.mesh.n_cells)
-        displacement_errors(items, r.u, ref_at, self.fine, self._reference_sq, block, self.tol)
+        displacement_errors(
+            items, r.u, ref_at, self.fine, self._reference_sq, block, self.tol, secondary
+        )
         out = []
         for c, p, cmap in zip(sols, found, cmaps, strict=True):
             wear_errors(p, c.contact_nodes, c.wear, r.mesh, r.contact_nodes, r.wear, cmap, self.tol)

@@ -48,6 +48,8 @@ class Pair:
         The common levels in the coarse and the reference grids.
     disp, wear, absolute : dict of str to (J,) arrays
         The relative and the absolute errors by variant, NaN until computed.
+    Pu : sparse matrix or None
+        The mean value prolongation to the reference vertices, once built.
     """
 
     mesh: Mesh
@@ -58,6 +60,7 @@ class Pair:
     disp: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     wear: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     absolute: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    Pu: sp.csr_matrix | None = None
 
     def put(self, kind: str, key: str, j: int, err_sq: float, ref_sq: float) -> None:
         """Store the error of the variant ``key`` of ``kind`` ("u" or "w") at common level
@@ -120,6 +123,7 @@ def displacement_errors(
     ref_sq: RefSq,
     block: int,
     tol: float | None,
+    secondary: str = "common",
 ) -> None:
     """The displacement variants of every pair at its common levels where both
     displacements are stored, a block of reference levels at a time.
@@ -141,6 +145,9 @@ def displacement_errors(
         Reference levels per block.
     tol : float, optional
         Tolerance of the point searches of the prolongation.
+    secondary : {"common", "final"}
+        The secondary variants (``H1_coarse``, ``H1semi_meanvalue``) at every common
+        level, or only at the last (``t = T``; NaN at the others).
     """
     todo = []  # (pair, common levels) with both displacements stored
     for p, _cn, _u, stored in items:
@@ -148,17 +155,15 @@ def displacement_errors(
     if not any(jj.size for jj in todo):
         return
     levels = np.unique(np.concatenate([p.ir[jj] for (p, *_), jj in zip(items, todo, strict=True)]))
-    Pu = [
-        prolongations(p, fine.mesh, tol) if jj.size else None
-        for (p, *_), jj in zip(items, todo, strict=True)
-    ]
+    if secondary not in ("common", "final"):
+        raise ValueError(f"secondary must be 'common' or 'final', got {secondary!r}")
     for first in range(0, len(levels), block):
         lv = levels[first : first + block]
         fr_all = fine.projection.many(ref_u[ref_at[lv]])
         ref_all = ref_sq(lv, fr_all)
-        for (p, cn, u, stored), jj, P in zip(items, todo, Pu, strict=True):
+        for (p, cn, u, stored), jj in zip(items, todo, strict=True):
             jj = jj[np.isin(p.ir[jj], lv)]
-            if jj.size == 0 or P is None:
+            if jj.size == 0:
                 continue
             sel = np.searchsorted(lv, p.ir[jj])
             whole = len(sel) == len(lv)  # then sel is 0, 1, ...: the block itself
@@ -168,40 +173,50 @@ def displacement_errors(
                 else LinearFields(fr_all.xbar, fr_all.value[sel], fr_all.gradient[sel])
             )
             ref = [ref_all[i] for i in sel.tolist()]
-            _levels(p, cn, fine, P, u[stored[jj]], ref_u[ref_at[p.ir[jj]]], fr, ref, jj)
+            last = secondary == "final"
+            sec = np.flatnonzero(jj == len(p.ic) - 1) if last else np.arange(len(jj))
+            if sec.size and p.Pu is None:
+                p.Pu = prolongations(p, fine.mesh, tol)
+            _levels(p, cn, fine, u[stored[jj]], ref_u[ref_at[p.ir[jj]]], fr, ref, jj, sec)
 
 
 def _levels(
     p: Pair,
     cn: ProjectedNorms,
     fine: ProjectedNorms,
-    Pu: sp.csr_matrix,
     uh: NDArray[np.float64],
     ur: NDArray[np.float64],
     fr: LinearFields,
     ref: list[tuple[float, float]],
     jj: NDArray[np.int64],
+    sec: NDArray[np.int64],
 ) -> None:
     """The displacement variants of ``p`` at its common levels ``jj`` (one block), with
-    the coarse and the reference displacements, ``Pi_ref u_ref`` and its norms there."""
-    n = len(jj)
+    the coarse and the reference displacements, ``Pi_ref u_ref`` and its norms there;
+    the secondary variants at the levels ``jj[sec]``."""
     fh = cn.projection.many(uh)
     moments = (fine.area, fine.M1, fine.M2)
     nested = [x.sum(axis=-1) for x in nested_difference_norms_sq(fh, fr, p.cells, moments)]
-    ur_h = ur[:, p.idx]
-    diff = [x.sum(axis=-1) for x in cn.norms_sq(cn.projection.many(uh - ur_h))]
-    at_h = [x.sum(axis=-1) for x in cn.norms_sq(cn.projection.many(ur_h))]
-    mean = (Pu @ uh.reshape(n, -1).T).T - ur.reshape(n, -1)
-    semi_mean = fine.seminorms_sq(fine.projection.many(mean)).sum(axis=-1)
     for i, j in enumerate(jj.tolist()):
         r_l2, r_semi = ref[i]
         l2, semi = float(nested[0][i]), float(nested[1][i])
         p.put("u", "H1", j, l2 + semi, r_l2 + r_semi)
         p.put("u", "H1semi", j, semi, r_semi)
+    if sec.size == 0 or p.Pu is None:
+        return
+    n = len(sec)
+    uh, ur = uh[sec], ur[sec]
+    ur_h = ur[:, p.idx]
+    diff = [x.sum(axis=-1) for x in cn.norms_sq(cn.projection.many(uh - ur_h))]
+    at_h = [x.sum(axis=-1) for x in cn.norms_sq(cn.projection.many(ur_h))]
+    mean = (p.Pu @ uh.reshape(n, -1).T).T - ur.reshape(n, -1)
+    semi_mean = fine.seminorms_sq(fine.projection.many(mean)).sum(axis=-1)
+    for i, s in enumerate(sec.tolist()):
+        j = int(jj[s])
         l2, semi = float(diff[0][i]), float(diff[1][i])
         rl2, rsemi = float(at_h[0][i]), float(at_h[1][i])
         p.put("u", "H1_coarse", j, l2 + semi, rl2 + rsemi)
-        p.put("u", "H1semi_meanvalue", j, float(semi_mean[i]), r_semi)
+        p.put("u", "H1semi_meanvalue", j, float(semi_mean[i]), ref[s][1])
 
 
 def wear_errors(
