@@ -125,21 +125,20 @@ def prolongation(
         if np.any(inside):
             # mean value coordinates: w_i = (tan(a_{i-1}/2) + tan(a_i/2)) / r_i, with a_i the
             # angle at x of the edge (A_i, B_i); tan(a/2) = cross / (r_A r_B + dot)
+            # (sums over the two coordinates written out: the same numbers, faster)
             t_ = np.flatnonzero(inside)
-            dA, dB = A[t_] - P[t_], B[t_] - P[t_]
-            rA, rB = np.linalg.norm(dA, axis=-1), np.linalg.norm(dB, axis=-1)
-            cr = dA[..., 0] * dB[..., 1] - dA[..., 1] * dB[..., 0]
-            dot = np.sum(dA * dB, axis=-1)
-            tan = cr / (rA * rB + dot)  # 0 on degenerate (padded) edges
-            w_edge = tan / rA + tan / rB  # contributions to the edge's two ends
+            Pt, At, Bt = P[t_], A[t_], B[t_]
+            ax, ay = At[..., 0] - Pt[..., 0], At[..., 1] - Pt[..., 1]
+            bx, by = Bt[..., 0] - Pt[..., 0], Bt[..., 1] - Pt[..., 1]
+            rA, rB = np.sqrt(ax * ax + ay * ay), np.sqrt(bx * bx + by * by)
+            tan = (ax * by - ay * bx) / (rA * rB + (ax * bx + ay * by))  # 0 if degenerate
+            tA, tB = tan / rA, tan / rB  # contributions to the edge's two ends
+            tot = np.sum(tA + tB, axis=1)[:, None]
             pts = np.repeat(todo[t_], nmax)
-            w = np.concatenate([(tan / rA).ravel(), (tan / rB).ravel()])
-            tot = np.sum(w_edge, axis=1)
-            w = w / np.concatenate([np.repeat(tot, nmax), np.repeat(tot, nmax)])
             add(
                 np.concatenate([pts, pts]),
                 np.concatenate([V[owner[t_]].ravel(), Vn[owner[t_]].ravel()]),
-                w,
+                np.concatenate([(tA / tot).ravel(), (tB / tot).ravel()]),
             )
         return ~(on_edge | inside)
 
