@@ -23,7 +23,13 @@ from numpy.typing import NDArray
 from ..mesh.locate import NonNestedMeshError, match_vertices, nested_cells
 from ..mesh.polymesh import Mesh
 from ..vem.projection import LinearFields
-from .norms import ProjectedNorms, nested_difference_norms_sq, relative_error, wear_error
+from .norms import (
+    ProjectedNorms,
+    nested_difference_norms_sq,
+    nested_offsets,
+    relative_error,
+    wear_error,
+)
 from .prolong import contact_prolongation, prolongation
 
 __all__ = ["Pair", "displacement_errors", "pairs", "wear_errors"]
@@ -50,6 +56,8 @@ class Pair:
         The relative and the absolute errors by variant, NaN until computed.
     Pu : sparse matrix or None
         The mean value prolongation to the reference vertices, once built.
+    offsets : (dx0, dx1) or None
+        :func:`~vemwear.post.norms.nested_offsets` of the two meshes, once computed.
     """
 
     mesh: Mesh
@@ -61,6 +69,7 @@ class Pair:
     wear: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     absolute: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     Pu: sp.csr_matrix | None = None
+    offsets: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
 
     def put(self, kind: str, key: str, j: int, err_sq: float, ref_sq: float) -> None:
         """Store the error of the variant ``key`` of ``kind`` ("u" or "w") at common level
@@ -196,7 +205,11 @@ def _levels(
     the secondary variants at the levels ``jj[sec]``."""
     fh = cn.projection.many(uh)
     moments = (fine.area, fine.M1, fine.M2)
-    nested = [x.sum(axis=-1) for x in nested_difference_norms_sq(fh, fr, p.cells, moments)]
+    if p.offsets is None:
+        p.offsets = nested_offsets(fh.xbar, fr.xbar, p.cells)
+    nested = [
+        x.sum(axis=-1) for x in nested_difference_norms_sq(fh, fr, p.cells, moments, p.offsets)
+    ]
     for i, j in enumerate(jj.tolist()):
         r_l2, r_semi = ref[i]
         l2, semi = float(nested[0][i]), float(nested[1][i])
