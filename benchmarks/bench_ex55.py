@@ -12,6 +12,11 @@ Interleaved repeats (every part once, then again) of three child processes:
   (the user's default ``--cache`` is their cache directory; here a private one, so that
   the benchmark neither reads nor replaces the user's).
 
+With ``--baseline SRC``, the first and second runs also with the package at ``SRC`` (put
+first on ``PYTHONPATH``; e.g. ``git archive COMMIT src | tar -x -C DIR`` of an earlier
+commit, then ``--baseline DIR/src``), interleaved with the others, each with its own
+cache (the caches of two versions differ in their hash).
+
 Otherwise the user's defaults (figures on, no study, the progress bar off as it is
 without a terminal). Wall time from start to exit, printed as min / median / max and
 the median over the floor's median. Each command runs once untimed first, with bytecode
@@ -21,6 +26,7 @@ has it. The first runs print the size of the cache they wrote.
 Usage::
 
     python benchmarks/bench_ex55.py --repeat 3
+    python benchmarks/bench_ex55.py --repeat 3 --baseline /tmp/before/src
 """
 
 from __future__ import annotations
@@ -55,16 +61,20 @@ def main(argv: list[str] | None = None) -> int:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--baseline", type=Path, default=None, help="src directory of a baseline")
     a = ap.parse_args(argv)
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    versions = {"": env}
+    if a.baseline is not None:
+        path = os.pathsep.join([str(a.baseline.resolve()), env.get("PYTHONPATH", "")])
+        versions["baseline "] = {**env, "PYTHONPATH": path}
     example = [sys.executable, "-m", "vemwear", "example", "5.5", "--no-progress"]
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
-        warm = tmp / "cache"
-        warm.mkdir()
-        times: dict[str, list[float]] = {
-            k: [] for k in ("floor", "floor process", "first run", "second run")
-        }
+        times: dict[str, list[float]] = {"floor": [], "floor process": []}
+        for v in versions:
+            times[f"{v}first run"], times[f"{v}second run"] = [], []
+            (tmp / f"{v}cache").mkdir()
         sizes: list[int] = []
         for r in range(a.repeat + 1):
             t = time.perf_counter()
@@ -72,27 +82,26 @@ def main(argv: list[str] | None = None) -> int:
                 [sys.executable, "-c", FLOOR], env=env, check=True, capture_output=True, text=True
             )
             wall = time.perf_counter() - t
-            splu = float(out.stdout.split("SPLU")[-1])
-            cold = tmp / f"cold{r}"
-            cold.mkdir()
-            cache = cold if r else warm  # the untimed round fills the second runs' cache
-            t = time.perf_counter()
-            cmd = [*example, "-o", str(tmp / f"first{r}"), "--cache", str(cache)]
-            subprocess.run(cmd, env=env, check=True, capture_output=True)
-            first = time.perf_counter() - t
-            sizes.append(_size(cache))
-            t = time.perf_counter()
-            cmd = [*example, "-o", str(tmp / f"second{r}"), "--cache", str(warm)]
-            subprocess.run(cmd, env=env, check=True, capture_output=True)
-            second = time.perf_counter() - t
-            if r:
-                for k, x in zip(times, (splu, wall, first, second), strict=True):
-                    times[k].append(x)
+            if r:  # the first round writes the bytecode and fills the second runs' caches
+                times["floor"].append(float(out.stdout.split("SPLU")[-1]))
+                times["floor process"].append(wall)
+            for v, venv in versions.items():
+                warm = tmp / f"{v}cache"
+                cache = tmp / f"{v}cold{r}" if r else warm
+                cache.mkdir(exist_ok=True)
+                for kind, c in (("first", cache), ("second", warm)):
+                    cmd = [*example, "-o", str(tmp / f"{v}{kind}{r}"), "--cache", str(c)]
+                    t = time.perf_counter()
+                    subprocess.run(cmd, env=venv, check=True, capture_output=True)
+                    if r:
+                        times[f"{v}{kind} run"].append(time.perf_counter() - t)
+                if not v:
+                    sizes.append(_size(cache))
         floor = statistics.median(times["floor"])
         for name, x in times.items():
             med = statistics.median(x)
             print(
-                f"{name:>13} | {min(x):6.2f} {med:6.2f} {max(x):6.2f} s | "
+                f"{name:>19} | {min(x):6.2f} {med:6.2f} {max(x):6.2f} s | "
                 f"{med / floor:5.2f} x floor"
             )
         print(f"cache written by a first run: {max(sizes) / 1e6:.1f} MB")
