@@ -170,3 +170,62 @@ def test_blocks_of_levels_give_the_numbers_of_single_levels(
         one = proj(u)
         np.testing.assert_array_equal(block.value[i], one.value)
         np.testing.assert_array_equal(block.gradient[i], one.gradient)
+
+
+def test_errors_many_gives_the_errors_of_each_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Several runs at once (a mesh located through a finer run's mesh when nested in it,
+    directly otherwise; the reference's projection at a level shared): the numbers of
+    each run alone, bit for bit, every variant."""
+    import vemwear.post.nested_errors as ne
+
+    ns = (3, 4, 6)  # 3 is nested in 6, not in 4
+    fine = simulate(ex55.problem(12), store=ex55.common_times(ns))
+    runs = [simulate(ex55.problem(n), store="all") for n in ns]
+    cmp = Comparison(fine)
+    searched: list[int] = []
+
+    def spy(coarse, f, **kw):
+        searched.append(f.n_cells)
+        return nested_cells(coarse, f, **kw)
+
+    from vemwear.mesh.locate import nested_cells
+
+    monkeypatch.setattr(ne, "nested_cells", spy)
+    many = cmp.errors_many(runs)
+    # 6 and 4 in the reference, 3 in 6's mesh
+    assert searched == [fine.problem.mesh.n_cells] * 2 + [72]
+    monkeypatch.undo()
+    for run, h in zip(runs, many, strict=True):
+        one = Comparison(fine).errors(run)
+        np.testing.assert_array_equal(h.t, one.t)
+        np.testing.assert_array_equal(h.ref_levels, one.ref_levels)
+        for a, b in (
+            (h.displacement, one.displacement),
+            (h.wear, one.wear),
+            (h.absolute, one.absolute),
+        ):
+            assert a.keys() == b.keys()
+            for k in a:
+                assert np.isfinite(a[k][1:]).all(), k
+                np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+    # the secondary variants at t = T only: the same there, NaN before; the rest the same
+    final = cmp.errors_many(runs, secondary="final")
+    for h, f in zip(many, final, strict=True):
+        for k in h.displacement:
+            a, b = h.displacement[k], f.displacement[k]
+            if k in ("H1_coarse", "H1semi_meanvalue"):
+                assert np.isnan(b[:-1]).all() and b[-1] == a[-1], k
+            else:
+                np.testing.assert_array_equal(a, b, err_msg=k)
+    with pytest.raises(NonNestedMeshError):
+        cmp.errors_many([runs[2], simulate(ex55.problem(5))])
+
+
+def test_prolongation_with_the_coarse_vertices_given_is_the_same_map() -> None:
+    from vemwear.mesh.locate import match_vertices
+
+    fine = rectangle_squares(SIZE, (16, 8))
+    for coarse in (rectangle_squares(SIZE, (4, 2)), squares_with_hanging_nodes(SIZE, (4, 2))):
+        P = prolongation(coarse, fine.points)
+        Q = prolongation(coarse, fine.points, vertices=match_vertices(coarse.points, fine.points))
+        assert (P != Q).nnz == 0

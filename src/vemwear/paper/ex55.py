@@ -117,17 +117,18 @@ def _prepare(ctx: Context) -> None:
         progress=ctx.progress,
         log=ctx.log,
     )
-    ctx.state.update(levels=lv, reference=ref, reference_info=info, histories={})
+    ctx.state.update(levels=lv, reference=ref, reference_info=info)
     ctx.state["comparison"] = Comparison(sol)
-
-
-def _after_run(ctx: Context, name: str, res: Any) -> None:
-    ctx.state["histories"][int(name[1:])] = ctx.state["comparison"].errors(res)
 
 
 def _analyse(ctx: Context) -> dict[str, Any]:
     st = ctx.state
-    tables = error_tables(st["histories"])
+    # all the runs at once: the reference's projection at a level serves every run; the
+    # tables take the secondary variants at t = T only
+    names = list(ctx.results)
+    runs = [ctx.results[n] for n in names]
+    histories = st["comparison"].errors_many(runs, secondary="final")
+    tables = error_tables({int(n[1:]): h for n, h in zip(names, histories, strict=True)})
     study = None
     if ctx.params["study"]:
         from .ex55_study import wear_error_study
@@ -190,7 +191,6 @@ EXAMPLE = Example(
     problems=problems,
     check=_check,
     prepare=_prepare,
-    after_run=_after_run,
     analyse=_analyse,
     setup=R.setup,
     sections=(R.errors_section,),

@@ -42,10 +42,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..mesh.locate import NonNestedMeshError, match_vertices, nested_cells
+from ..mesh.locate import NonNestedMeshError
 from ..mesh.polymesh import Mesh
 from ..vem.projection import LinearFields
-from .norms import ProjectedNorms, nested_difference_norms_sq, relative_error, wear_error
+from .nested_errors import displacement_errors, pairs, wear_errors
+from .norms import ProjectedNorms
 from .prolong import contact_prolongation, prolongation
 
 if TYPE_CHECKING:
@@ -341,91 +342,85 @@ class Comparison:
         ValueError
             If the grids have no common level, or do not share ``T``.
         """
-        c, r = _solution(coarse), self.reference
-        idx = match_vertices(c.mesh.points, r.mesh.points, tol=self.tol)
-        cmap = self._ref_contact[idx[c.contact_nodes]]
-        if np.any(cmap < 0):
-            a = int(np.flatnonzero(cmap < 0)[0])
-            raise NonNestedMeshError(
-                f"coarse contact node {a} (vertex {int(c.contact_nodes[a])} at "
-                f"{c.mesh.points[c.contact_nodes[a]].tolist()}) is not a contact node of the "
-                "reference"
-            )
-        cells = nested_cells(c.mesh, r.mesh, tol=self.tol)
-        ic, ir = self._levels(c, levels)
-        coarse_norms = ProjectedNorms(c.mesh)
-        # a fine vertex lies in the closure of the coarse cell of any fine cell around it
-        vertex_cell = np.full(r.mesh.n_points, -1, dtype=np.int64)
-        vertex_cell[r.mesh.cell_vertices] = cells[r.mesh.edge_cells]
-        Pu = prolongation(c.mesh, r.mesh.points, tol=self.tol, cells=vertex_cell)
-        Pw = contact_prolongation(
-            c.mesh, c.contact_nodes, r.mesh.points[r.contact_nodes], tol=self.tol
-        )
-        J = len(ic)
-        disp = {v: np.full(J, np.nan) for v in DISPLACEMENT_VARIANTS}
-        wear = {v: np.full(J, np.nan) for v in WEAR_VARIANTS}
-        absolute = {f"u_{v}": np.full(J, np.nan) for v in DISPLACEMENT_VARIANTS}
-        absolute.update({f"w_{v}": np.full(J, np.nan) for v in WEAR_VARIANTS})
+        return self.errors_many([coarse], levels=levels)[0]
 
-        def put(kind: str, key: str, j: int, err_sq: float, ref_sq: float) -> None:
-            e = relative_error(math.sqrt(max(err_sq, 0.0)), math.sqrt(max(ref_sq, 0.0)))
-            (disp if kind == "u" else wear)[key][j] = e.relative
-            absolute[f"{kind}_{key}"][j] = e.error
+    def errors_many(
+        self,
+        runs: Sequence[Solution | Result],
+        *,
+        levels: str = "common",
+        secondary: str = "common",
+    ) -> list[ErrorHistory]:
+        """:meth:`errors` of several coarse runs, the same numbers, in less time: the
+        reference's projection at a level is computed once for all the runs that have
+        it, and a mesh nested in a finer run's mesh is located through that mesh
+        (:mod:`vemwear.post.nested_errors`).
 
-        # the displacement variants, for a block of levels at a time (every mesh-dependent
-        # operator above built once; each level's numbers as if computed alone)
-        ca, ra = _stored_at(c, ic), _stored_at(r, ir)
-        both = np.flatnonzero((ca >= 0) & (ra >= 0))
+        Parameters
+        ----------
+        runs : sequence of Solution or Result
+        levels : {"common", "final"}
+        secondary : {"common", "final"}
+            The secondary displacement variants (``H1_coarse``, ``H1semi_meanvalue``)
+            at the levels of ``levels``, or only at ``t = T`` (NaN at the others; the
+            mean value variant costs a projection on the reference mesh per level).
+
+        Returns
+        -------
+        list of ErrorHistory
+            In the order of ``runs``.
+
+        Raises
+        ------
+        NonNestedMeshError, ValueError
+            As :meth:`errors`, for the first run concerned.
+        """
+        r = self.reference
+        sols = [_solution(c) for c in runs]
+        found = pairs([c.mesh for c in sols], r.mesh, self.tol)
+        cmaps = []
+        for c, p in zip(sols, found, strict=True):
+            cmap = self._ref_contact[p.idx[c.contact_nodes]]
+            if np.any(cmap < 0):
+                a = int(np.flatnonzero(cmap < 0)[0])
+                raise NonNestedMeshError(
+                    f"coarse contact node {a} (vertex {int(c.contact_nodes[a])} at "
+                    f"{c.mesh.points[c.contact_nodes[a]].tolist()}) is not a contact node "
+                    "of the reference"
+                )
+            cmaps.append(cmap)
+            p.ic, p.ir = self._levels(c, levels)
+            J = len(p.ic)
+            p.disp = {v: np.full(J, np.nan) for v in DISPLACEMENT_VARIANTS}
+            p.wear = {v: np.full(J, np.nan) for v in WEAR_VARIANTS}
+            p.absolute = {f"u_{v}": np.full(J, np.nan) for v in DISPLACEMENT_VARIANTS}
+            p.absolute.update({f"w_{v}": np.full(J, np.nan) for v in WEAR_VARIANTS})
+        ref_at = _stored_at(r, np.arange(len(r.t), dtype=np.int64))
+        items = [
+            (p, ProjectedNorms(c.mesh), c.u, _stored_at(c, p.ic))
+            for c, p in zip(sols, found, strict=True)
+        ]
         block = max(1, _BLOCK // r.mesh.n_cells)
-        for first in range(0, len(both), block):
-            jj = both[first : first + block]
-            uh, ur = c.u[ca[jj]], r.u[ra[jj]]
-            n = len(jj)
-            fh, fr = coarse_norms.projection.many(uh), self.fine.projection.many(ur)
-            ref = self._reference_sq(ir[jj], fr)
-            nested = [
-                x.sum(axis=-1) for x in nested_difference_norms_sq(fh, fr, cells, self._moments)
-            ]
-            ur_h = ur[:, idx]
-            diff = [
-                x.sum(axis=-1)
-                for x in coarse_norms.norms_sq(coarse_norms.projection.many(uh - ur_h))
-            ]
-            at_h = [
-                x.sum(axis=-1) for x in coarse_norms.norms_sq(coarse_norms.projection.many(ur_h))
-            ]
-            mean = (Pu @ uh.reshape(n, -1).T).T - ur.reshape(n, -1)
-            semi_mean = self.fine.seminorms_sq(self.fine.projection.many(mean)).sum(axis=-1)
-            for i, j in enumerate(jj.tolist()):
-                r_l2, r_semi = ref[i]
-                l2, semi = float(nested[0][i]), float(nested[1][i])
-                put("u", "H1", j, l2 + semi, r_l2 + r_semi)
-                put("u", "H1semi", j, semi, r_semi)
-                l2, semi = float(diff[0][i]), float(diff[1][i])
-                rl2, rsemi = float(at_h[0][i]), float(at_h[1][i])
-                put("u", "H1_coarse", j, l2 + semi, rl2 + rsemi)
-                put("u", "H1semi_meanvalue", j, float(semi_mean[i]), r_semi)
-        for j, (a, b) in enumerate(zip(ic.tolist(), ir.tolist(), strict=True)):
-            for key, e in (
-                ("L2", wear_error(r.mesh, r.contact_nodes, Pw @ c.wear[a], r.wear[b])),
-                ("L2_coarse", wear_error(c.mesh, c.contact_nodes, c.wear[a], r.wear[b][cmap])),
-                (
-                    "nodal_coarse",
-                    wear_error(c.mesh, c.contact_nodes, c.wear[a], r.wear[b][cmap], "nodal"),
-                ),
-            ):
-                put("w", key, j, e.error**2, e.reference**2)
-        k = float(np.diff(c.t).max()) if len(c.t) > 1 else float("nan")
-        return ErrorHistory(
-            t=c.t[ic].copy(),
-            levels=ic,
-            ref_levels=ir,
-            displacement=disp,
-            wear=wear,
-            absolute=absolute,
-            h=c.mesh.h,
-            k=k,
+        displacement_errors(
+            items, r.u, ref_at, self.fine, self._reference_sq, block, self.tol, secondary
         )
+        out = []
+        for c, p, cmap in zip(sols, found, cmaps, strict=True):
+            wear_errors(p, c.contact_nodes, c.wear, r.mesh, r.contact_nodes, r.wear, cmap, self.tol)
+            k = float(np.diff(c.t).max()) if len(c.t) > 1 else float("nan")
+            out.append(
+                ErrorHistory(
+                    t=c.t[p.ic].copy(),
+                    levels=p.ic,
+                    ref_levels=p.ir,
+                    displacement=p.disp,
+                    wear=p.wear,
+                    absolute=p.absolute,
+                    h=c.mesh.h,
+                    k=k,
+                )
+            )
+        return out
 
 
 def solution_errors(

@@ -48,6 +48,7 @@ __all__ = [
     "linear_norms_sq",
     "linear_seminorms_sq",
     "nested_difference_norms_sq",
+    "nested_offsets",
     "projected_norm",
     "relative_error",
     "wear_error",
@@ -214,6 +215,7 @@ def nested_difference_norms_sq(
     fine: LinearFields,
     cells: NDArray[np.int64],
     moments: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]],
+    offsets: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Squared L2 norm and H1 seminorm, per fine cell, of ``coarse - fine``.
 
@@ -232,10 +234,12 @@ def nested_difference_norms_sq(
     moments : (area, M1, M2)
         Of the fine cells about their vertex averages (``fine.xbar``),
         :func:`~vemwear.vem.quadrature.polygon_moments`.
+    offsets : (dx0, dx1), optional
+        The components of ``fine.xbar - coarse.xbar[cells]``, contiguous (computed if
+        not given; the same for every field of the two meshes).
     """
     area, M1, M2 = moments
-    dx = fine.xbar - coarse.xbar[cells]
-    dx0, dx1 = dx[:, 0], dx[:, 1]
+    dx0, dx1 = nested_offsets(coarse.xbar, fine.xbar, cells) if offsets is None else offsets
 
     def at(x: NDArray[np.float64]) -> NDArray[np.float64]:  # coarse cell values -> fine cells
         return np.take(x, cells, axis=-1)
@@ -249,6 +253,15 @@ def nested_difference_norms_sq(
     ]
     D = [g - f for g, f in zip(G, _entries(fine.gradient), strict=True)]
     return _norms_sq(area, M1, M2, *c, *D)
+
+
+def nested_offsets(
+    coarse_xbar: NDArray[np.float64], fine_xbar: NDArray[np.float64], cells: NDArray[np.int64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The components of ``fine_xbar - coarse_xbar[cells]`` (contiguous): the offsets of
+    :func:`nested_difference_norms_sq`."""
+    dx = fine_xbar - coarse_xbar[cells]
+    return np.ascontiguousarray(dx[:, 0]), np.ascontiguousarray(dx[:, 1])
 
 
 def contact_l2_norm(

@@ -243,6 +243,16 @@ class Projection:
             Gw = np.take_along_axis(lp.gradient.reshape(m, 4, n, 2), order[:, None, :, None], 2)
             dofs = (2 * v[:, :, None] + np.arange(2)).reshape(m, 2 * n)
             # value at xbar: (1/n) sum_i v_ic for component c; then the gradient rows
+            s0 = int(start[ids[0]]) if m else 0
+            if np.array_equal(start[ids], s0 + 10 * n * np.arange(m)):
+                # the group's cells in a row (a mesh of one cell shape): written in place
+                ind = indices[s0 : s0 + 10 * n * m].reshape(m, 10 * n)
+                dat = data[s0 : s0 + 10 * n * m].reshape(m, 10 * n)
+                ind[:, :n], ind[:, n : 2 * n] = 2 * v, 2 * v + 1
+                ind[:, 2 * n :].reshape(m, 4, 2 * n)[:] = dofs[:, None, :]
+                dat[:, : 2 * n] = 1.0 / n
+                dat[:, 2 * n :] = Gw.reshape(m, 8 * n)
+                continue
             pos = start[ids][:, None] + np.arange(10 * n)
             indices[pos] = np.concatenate([2 * v, 2 * v + 1, np.tile(dofs, 4)], axis=1)
             data[pos] = np.concatenate([np.full((m, 2 * n), 1.0 / n), Gw.reshape(m, 8 * n)], axis=1)
