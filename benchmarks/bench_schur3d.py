@@ -39,7 +39,7 @@ import scipy.sparse as sp
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from bench_3d import CASES, SIDES
+from bench_3d import CASES
 
 CASES_HERE = {**CASES, "tet": ("tetrahedra", (24, 12, 12), 64)}
 
@@ -47,11 +47,9 @@ CASES_HERE = {**CASES, "tet": ("tetrahedra", (24, 12, 12), 64)}
 def build(name: str) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
     """K on the free dofs, the contact dofs (as the condensed solver orders them), the
     dof points."""
-    from vemwear.contact import LinearCompliance
-    from vemwear.mesh.generate3d import box_hexahedra, box_tetrahedra, tag_box
+    from vemwear.mesh.generate3d import box_hexahedra, box_tetrahedra
     from vemwear.mesh.voronoi3d import box_voronoi
-    from vemwear.simulate import Problem, TimeGrid
-    from vemwear.vem import Material
+    from vemwear.paper.ex3d import problem3d
 
     family, cells, _ = CASES_HERE[name]
     if family == "hexahedra":
@@ -60,18 +58,7 @@ def build(name: str) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
         mesh = box_tetrahedra((2.0, 1.0, 1.0), cells)
     else:
         mesh = box_voronoi((2.0, 1.0, 1.0), cells[0], seed=0)
-    pr = Problem(
-        tag_box(mesh, SIDES),
-        Material(4.0, 4.0),
-        TimeGrid.uniform(1.0, 4),
-        f1=(0.0, 0.0, -0.06),
-        p=LinearCompliance(0.4),
-        g=0.1,
-        mu=0.2,
-        kappa=2.0,
-        v_star=(1.0, 0.0, 0.0),
-    )
-    s = pr.discrete.system
+    s = problem3d(mesh, 4).discrete.system
     cd = s.contact_dofs.ravel()
     return sp.csr_matrix(s.K), cd[cd >= 0], s.dof_points
 

@@ -13,17 +13,13 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from vemwear.contact import LinearCompliance
-from vemwear.mesh.generate3d import box_hexahedra, box_tetrahedra, tag_box
+from vemwear.mesh.generate3d import box_hexahedra, box_tetrahedra
 from vemwear.mesh.voronoi3d import box_voronoi
-from vemwear.simulate import Problem, TimeGrid
+from vemwear.paper.ex3d import problem3d
 from vemwear.solvers.backends import available_backends, schur_factorize
 from vemwear.solvers.system import FactorizationError
-from vemwear.vem import Material
 
 INSTALLED = available_backends()
-SIDES = {"clamped": "xmin", "contact": "zmin", "traction": ["xmax", "ymin", "ymax", "zmax"]}
-
 MESHES = {
     "hexahedra": lambda: box_hexahedra((2.0, 1.0, 1.0), (4, 2, 2)),
     "voronoi3d": lambda: box_voronoi((2.0, 1.0, 1.0), 24, seed=1),
@@ -38,18 +34,7 @@ def rel(a, b) -> float:
 @pytest.fixture(scope="module", params=list(MESHES))
 def system3d(request):
     """K on the free dofs, the contact dofs in the solver's order, the dof points."""
-    pr = Problem(
-        tag_box(MESHES[request.param](), SIDES),
-        Material(4.0, 4.0),
-        TimeGrid.uniform(1.0, 2),
-        f1=(0.0, 0.0, -0.06),
-        p=LinearCompliance(0.4),
-        g=0.1,
-        mu=0.2,
-        kappa=2.0,
-        v_star=(1.0, 0.0, 0.0),
-    )
-    s = pr.discrete.system
+    s = problem3d(MESHES[request.param](), 2).discrete.system
     cd = s.contact_dofs.ravel()
     return sp.csr_matrix(s.K), cd[cd >= 0], s.dof_points
 

@@ -165,7 +165,7 @@ def test_a_wear_mesh_change_refines_until_the_target_error() -> None:
     eta0 = float(np.sqrt(wear_indicators(mesh, nodes, np.exp(2 * x), ("contact",)).sum()))
     for target in (eta0 / 3, eta0 / 8):
         cfg = AdaptSettings(1, target_error=target, estimator="wear", transfer="cubic")
-        new, _ = change_mesh_for_wear(
+        new, _, _ = change_mesh_for_wear(
             mesh, tree, nodes, np.exp(2 * x), cfg, None, (("contact",), 0.0, True)
         )
         on, xn = _bottom(new)
@@ -245,7 +245,7 @@ def test_a_config_with_passes_makes_the_mesh_by_whole_runs_and_resumes_bitwise(t
     from conftest import run_until_segments, segments_done
     from vemwear.config import load_config
     from vemwear.examples import config_path
-    from vemwear.simulate import adapt
+    from vemwear.simulate.adapt import adapt_passes
 
     shipped = config_path("punch_passes")
 
@@ -264,14 +264,7 @@ def test_a_config_with_passes_makes_the_mesh_by_whole_runs_and_resumes_bitwise(t
     cfg = load_config(shipped)
     a = cfg.adapt
     assert a is not None and a.passes == 4 and a.target_error is not None
-    steps = adapt(
-        cfg.problem,
-        estimator=a.estimator,
-        transfer=a.transfer,
-        max_passes=a.passes,
-        target_error=a.target_error,
-        max_cells=a.max_cells,
-    )
+    steps, _, _ = adapt_passes(cfg.problem, a, a.passes)
     # the passes before the run are the loop's, and the run is its last pass
     assert [p["cells"] for p in passes] == [s.problem.mesh.n_cells for s in steps[:-1]]
     assert [p["eta"] for p in passes] == [s.eta for s in steps[:-1]]

@@ -32,7 +32,8 @@ from vemwear.config import apply_overrides, parse_config
 from vemwear.examples import config_path
 from vemwear.examples.punch_mesh import punch_mesh
 from vemwear.mesh import write_mesh
-from vemwear.simulate import adapt, simulate_adaptive
+from vemwear.simulate import simulate_adaptive
+from vemwear.simulate.adapt import adapt_passes
 
 
 def read(path: Path, base: Path):
@@ -93,14 +94,7 @@ fig.tight_layout()
 passes_cfg = read(config_path("punch_passes"), path.parent)
 a = passes_cfg.adapt
 assert a is not None
-steps = adapt(
-    passes_cfg.problem,
-    estimator=a.estimator,
-    transfer=a.transfer,
-    max_passes=a.passes,
-    target_error=a.target_error,
-    max_cells=a.max_cells,
-)
+steps, _, _ = adapt_passes(passes_cfg.problem, a, a.passes)  # the [adapt] settings
 print([s.problem.mesh.n_cells for s in steps], "cells", [f"{s.eta:.2e}" for s in steps])
 fig, axes = plt.subplots(1, 2, figsize=(9.0, 3.4), width_ratios=[1.2, 1.0])
 mesh = steps[-1].problem.mesh

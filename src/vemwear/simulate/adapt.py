@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ..mesh.adapt import CellTree, dorfler_marking
+from ..mesh.adapt import CellTree
 from ..mesh.curves import OFF_CHORD, BoundaryCurve
 from ..mesh.polymesh import Mesh
 from .estimate import Estimate, estimate_last
@@ -217,19 +217,14 @@ def adapt_passes(
             est = estimate_last(pr, res)
             eta2 = est.indicators
         eta = float(np.sqrt(eta2.sum()))
-        new = mesh
+        new, new_tree, marked = mesh, tree, np.zeros(0, dtype=np.int64)
         if k < n - 1 or refine_last:
             if cfg.estimator == "wear":
-                new, new_tree = change_mesh_for_wear(
+                new, new_tree, marked = change_mesh_for_wear(
                     mesh, tree, pr.contact.nodes, W, cfg, curve, move
                 )
             else:
-                new, new_tree = change_mesh(mesh, tree, eta2, eta, cfg, curve)
-        marked = np.zeros(0, dtype=np.int64)
-        if new is not mesh:  # the marks of Dörfler's criterion, for the record
-            marked = dorfler_marking(eta2, cfg.theta)
-            if cfg.max_level is not None:
-                marked = marked[tree.level[marked] < cfg.max_level]
+                new, new_tree, marked = change_mesh(mesh, tree, eta2, eta, cfg, curve)
         steps.append(AdaptiveStep(pr, res, tree.level, marked, eta, est))
         if new is mesh:
             break

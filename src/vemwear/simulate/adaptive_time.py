@@ -263,10 +263,10 @@ def _segments(
                 pr.discrete, res.wear[-1], res.p_soft[-1], res.p_rigid[-1], t[n1], t[N]
             )
             move = (parts, off_chord, cubic)
-            new, tree = change_mesh_for_wear(mesh, tree, pr.contact.nodes, W, cfg, curve, move)
+            new, tree, _ = change_mesh_for_wear(mesh, tree, pr.contact.nodes, W, cfg, curve, move)
         else:
             est = seg.estimate
-            new, tree = change_mesh(mesh, tree, est.indicators, est.total, cfg, curve)
+            new, tree, _ = change_mesh(mesh, tree, est.indicators, est.total, cfg, curve)
         w = res.wear[-1]
         if new is not mesh:
             nxt = dataclasses.replace(problem, mesh=new)

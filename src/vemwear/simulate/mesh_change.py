@@ -116,9 +116,10 @@ def change_mesh(
     total: float,
     cfg: AdaptSettings,
     curve: BoundaryCurve | None,
-) -> tuple[Mesh, CellTree]:
+) -> tuple[Mesh, CellTree, NDArray[np.int64]]:
     """Coarsen, then refine, once, by the indicators ``eta2`` (their estimate ``total``):
-    the new mesh and its tree."""
+    the new mesh, its tree, and the cells Dörfler's criterion marked for refinement
+    (before the graded closure; empty when nothing was refined)."""
     refine = dorfler_marking(eta2, cfg.theta)
     if cfg.max_level is not None:
         refine = refine[tree.level[refine] < cfg.max_level]
@@ -131,8 +132,8 @@ def change_mesh(
     if refine.size:
         new, tree2, _ = refine_tree(mesh, tree, owner[refine], cfg.max_difference, curve)
         if cfg.max_cells is None or new.n_cells <= cfg.max_cells:
-            return new, tree2
-    return mesh, tree
+            return new, tree2, refine
+    return mesh, tree, refine[:0]
 
 
 #: Most refinement rounds of one mesh change by the wear indicator.
@@ -147,17 +148,18 @@ def change_mesh_for_wear(
     cfg: AdaptSettings,
     curve: BoundaryCurve | None,
     move: tuple[tuple[str, ...], float, bool],
-) -> tuple[Mesh, CellTree]:
+) -> tuple[Mesh, CellTree, NDArray[np.int64]]:
     """A mesh change by the wear indicator of the predicted profile ``W`` at the contact
     ``nodes``: coarsen and refine once (:func:`change_mesh`), then refine again, the profile
     moved onto each new mesh (no solve), until its estimate is at most ``target_error``
     or, without one, a sixteenth of the old mesh's in eta^2 (what one uniform refinement
     gives a smooth profile, ``L^5`` per piece over twice the pieces), at most
-    :data:`WEAR_ROUNDS` rounds or ``max_cells``."""
+    :data:`WEAR_ROUNDS` rounds or ``max_cells``; returned as :func:`change_mesh` does, with
+    the marks of the first round."""
     parts, off_chord, cubic = move
     eta2 = wear_indicators(mesh, nodes, W, parts)
     goal = float(eta2.sum()) / 16.0 if cfg.target_error is None else cfg.target_error**2
-    new, tree = change_mesh(mesh, tree, eta2, float(np.sqrt(eta2.sum())), cfg, curve)
+    new, tree, marked = change_mesh(mesh, tree, eta2, float(np.sqrt(eta2.sum())), cfg, curve)
     for _ in range(WEAR_ROUNDS - 1):
         if new is mesh:  # nothing refined: marks at max_level, max_cells or the target
             break
@@ -168,5 +170,5 @@ def change_mesh_for_wear(
         if eta2.sum() <= goal:
             break
         cfg_refine = dataclasses.replace(cfg, coarsen=0.0)
-        new, tree = change_mesh(mesh, tree, eta2, float(np.sqrt(eta2.sum())), cfg_refine, curve)
-    return new, tree
+        new, tree, _ = change_mesh(mesh, tree, eta2, float(np.sqrt(eta2.sum())), cfg_refine, curve)
+    return new, tree, marked
