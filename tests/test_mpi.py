@@ -146,7 +146,12 @@ sys.exit(main(sys.argv[1:]))
 """
 
 
-def test_two_rank_run_stopped_resumes_on_one_rank(serial, tmp_path: Path) -> None:
+@pytest.mark.parametrize("resume_ranks", [None, 4])
+def test_two_rank_run_stopped_resumes_on_other_ranks(
+    serial, tmp_path: Path, resume_ranks: int | None
+) -> None:
+    """Stopped on two ranks, resumed in one process (no mpirun) or on four ranks, whose
+    partition of the cells is another: the run ends as the serial one."""
     cfg, ref = serial["2d"]
     script = tmp_path / "stopper.py"
     script.write_text(STOPPER.format(level=20))
@@ -157,9 +162,10 @@ def test_two_rank_run_stopped_resumes_on_one_rank(serial, tmp_path: Path) -> Non
     assert "vemwear: interrupted; the 20 finished time levels" in stopped.stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["partial"] is True and summary["completed"] == 20
-    resumed = _run(_vemwear(str(cfg), "-o", str(out), "--resume", "--backend", "petsc"))
+    again = _vemwear(str(cfg), "-o", str(out), "--resume", "--backend", "petsc")
+    resumed = _run(again if resume_ranks is None else _mpirun(resume_ranks, *again))
     assert resumed.returncode == 0, resumed.stdout + resumed.stderr
-    assert "resumed from level" in resumed.stdout
+    assert resumed.stdout.count("resumed from level") == 1
     _assert_equal_runs(ref, _arrays(out))
 
 
@@ -246,6 +252,62 @@ def test_schur_block_and_solves_on_two_ranks_at_a_larger_size(tmp_path: Path) ->
     assert done.returncode == 0, done.stdout + done.stderr
     errors = dict(line.split() for line in done.stdout.splitlines())
     assert float(errors["S_inv"]) < RTOL and float(errors["solve"]) < RTOL, errors
+
+
+ASSEMBLY_CHECK = """\
+import dataclasses, json, sys
+import numpy as np
+from vemwear.config.build import load_config
+from vemwear.solvers.backends import schur_factorize
+from vemwear.solvers.backends.petsc import serve, session
+
+with session() as root:
+    if not root:
+        serve()
+    else:
+        cfg = load_config(sys.argv[1])
+        d = cfg.problem.discrete
+        factor = d.step_solver(dataclasses.replace(cfg.solver, backend="petsc")).factor
+        s = d.system
+        ref = schur_factorize(s.K, factor.last, s.dof_points, "scipy")
+        B = np.random.default_rng(1).normal(size=(s.K.shape[0], 2))
+        X, Y = factor.solve(B), ref.solve(B)
+        print(json.dumps({
+            **factor.assembly_report,
+            "n_cells": d.problem.mesh.n_cells,
+            "n": s.K.shape[0],
+            "S_inv": float(np.abs(factor.S_inv - ref.S_inv).max() / np.abs(ref.S_inv).max()),
+            "solve": float(np.abs(X - Y).max() / np.abs(Y).max()),
+        }))
+"""
+
+
+@pytest.mark.parametrize(
+    ("case", "ranks"), [("2d", 2), ("2d", 3), ("2d k=2", 2), ("3d", 2), ("3d", 4)]
+)
+def test_each_rank_assembles_the_cells_of_its_part(tmp_path: Path, case: str, ranks: int) -> None:
+    """The distributed matrix is the sum of the ranks' own cells: every rank assembled
+    some cells and owns some rows, each cell and each row once, and the factorization of
+    that matrix gives the serial Schur block and solves."""
+    _need_mpi()
+    text = {
+        "2d": CONFIG_2D,
+        "2d k=2": small_config("mpi k=2", divisions=(16, 8), steps=2, vem={"order": 2}),
+        "3d": CONFIG_3D,
+    }[case]
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(text)
+    script = tmp_path / "check.py"
+    script.write_text(ASSEMBLY_CHECK)
+    done = _run(_mpirun(ranks, sys.executable, str(script), str(cfg)))
+    assert done.returncode == 0, done.stdout + done.stderr
+    got = json.loads(done.stdout.strip().splitlines()[-1])
+    assert got["partitioner"] in ("metis", "slabs")
+    cells, rows = got["cells"], got["rows"]
+    assert len(cells) == ranks and sum(cells) == got["n_cells"]
+    assert min(cells) >= 0.75 * got["n_cells"] / ranks  # balanced (54 cells: 12 to 15)
+    assert len(rows) == ranks and sum(rows) == got["n"] and min(rows) > 0
+    assert got["S_inv"] < RTOL and got["solve"] < RTOL, got
 
 
 def test_other_commands_under_mpirun_are_refused(tmp_path: Path) -> None:

@@ -31,6 +31,7 @@ from ..contact import (
 )
 from ..solvers.protocol import StepSolver
 from ..solvers.system import ContactSystem, StepData, StepSolution
+from .cellparts import CellAssembly
 from .constraints import describe_motions
 from .wear import wear_rate, wear_update
 
@@ -149,6 +150,9 @@ class Discretization:
             rigid_names=tuple(describe_motions(mesh, basis)) if rigid is not None else (),
             contact_names=tuple(cb.part_names),
             friction_total=np.array(on)[cb.part] if any(on) else None,
+            assembly=CellAssembly(
+                space, problem.material, problem.stabilization, self.free, con.ties
+            ),
         )
         wear = [pc.wear_on == "total" for pc in parts]
         #: the nodes whose wear rate takes the whole contact pressure (``wear_on =

@@ -142,7 +142,7 @@ class CondensedNewton:
             cols = last
             if self.rigid is None:
                 self.factor = schur_factorize(
-                    system.K, cols, system.dof_points, self.options.backend
+                    system.K, cols, system.dof_points, self.options.backend, system.assembly
                 )
             Nc = system.N[:, cols].toarray()
             CN = self.factor.S_inv @ Nc.T
@@ -153,7 +153,7 @@ class CondensedNewton:
             free = cd >= 0  # prescribed components of contact nodes are not unknowns
             if self.rigid is None:
                 self.factor = schur_factorize(
-                    system.K, cd[free], system.dof_points, self.options.backend
+                    system.K, cd[free], system.dof_points, self.options.backend, system.assembly
                 )
             k = system.contact_dofs.shape[1]  # the dimension d
             if np.all(free):

@@ -71,6 +71,11 @@ class ContactSystem:
     friction_total : (m,) bool, optional
         The nodes where friction acts on the whole contact pressure ``p_soft +
         p_rigid`` (``friction_on = "total"``); None: on ``p_soft`` everywhere.
+    assembly : optional
+        K as a sum over the mesh's cells, for a backend that assembles it rank by rank
+        over an MPI job (the petsc backend): an object with ``n_cells``,
+        ``partition(parts)`` and ``part(cells)``
+        (:class:`vemwear.simulate.cellparts.CellAssembly`); the serial backends use K.
     """
 
     K: sp.csr_matrix
@@ -86,6 +91,7 @@ class ContactSystem:
     rigid_names: tuple[str, ...] = ()
     contact_names: tuple[str, ...] = ()
     friction_total: NDArray[np.bool_] | None = None
+    assembly: Any = None
     N: sp.csr_matrix = field(init=False, repr=False)
     Tau: sp.csr_matrix = field(init=False, repr=False)
     c_ncp: NDArray[np.float64] = field(init=False, repr=False)

@@ -28,7 +28,12 @@ def _dofs(verts: NDArray[np.int64]) -> NDArray[np.int64]:
     return d
 
 
-def stiffness(mesh: Mesh, material: Material, stabilization: str = "paper") -> sp.csr_matrix:
+def stiffness(
+    mesh: Mesh,
+    material: Material,
+    stabilization: str = "paper",
+    cells: NDArray[np.int64] | None = None,
+) -> sp.csr_matrix:
     """Assemble the VEM stiffness matrix of ``a_h`` on all ``2 * n_points`` dofs.
 
     Triangles take :func:`~vemwear.vem.local.triangle_matrices` (P1, where the
@@ -36,7 +41,8 @@ def stiffness(mesh: Mesh, material: Material, stabilization: str = "paper") -> s
     Local matrices are built group by group (cells of equal vertex count), in chunks of
     :data:`CHUNK` cells so that the batched temporaries stay small and are reused
     (fresh arrays of hundreds of MB cost more in page faults than the arithmetic), and
-    scattered once into a COO matrix.
+    scattered once into a COO matrix. ``cells`` (ids) assembles the sum over those
+    cells only (one MPI rank's part), in the same global numbering.
     """
     if stabilization not in STABILIZATIONS:
         raise ValueError(
@@ -44,11 +50,12 @@ def stiffness(mesh: Mesh, material: Material, stabilization: str = "paper") -> s
         )
     ndof = 2 * mesh.n_points
     index = np.int32 if ndof < 2**31 - 1 else np.int64  # less memory traffic in the scatter
-    total = sum(len(verts) * (2 * n) ** 2 for n, (_ids, verts) in mesh.groups.items())
+    groups = _chosen(mesh.groups, mesh.n_cells, cells)
+    total = sum(len(verts) * (2 * n) ** 2 for n, verts in groups)
     rows, cols = np.empty(total, dtype=index), np.empty(total, dtype=index)
     vals = np.empty(total)  # filled in place: no concatenation of the groups
     at = 0
-    for n, (_ids, verts) in mesh.groups.items():
+    for n, verts in groups:
         n2 = 2 * n
         for a in range(0, len(verts), CHUNK):
             v = verts[a : a + CHUNK]
@@ -66,6 +73,19 @@ def stiffness(mesh: Mesh, material: Material, stabilization: str = "paper") -> s
     A = sp.coo_matrix((vals, (rows, cols)), shape=(ndof, ndof)).tocsr()
     A.sum_duplicates()
     return A
+
+
+def _chosen(
+    groups: dict[int, tuple[NDArray[np.int64], NDArray[np.int64]]],
+    n_cells: int,
+    cells: NDArray[np.int64] | None,
+) -> list[tuple[int, NDArray[np.int64]]]:
+    """The groups' vertex ids, of the ``cells`` only when given."""
+    if cells is None:
+        return [(n, verts) for n, (_ids, verts) in groups.items()]
+    keep = np.zeros(n_cells, dtype=bool)
+    keep[np.asarray(cells, dtype=np.int64)] = True
+    return [(n, verts[keep[ids]]) for n, (ids, verts) in groups.items()]
 
 
 def body_force_vector(mesh: Mesh, f1: Field, t: float = 0.0) -> NDArray[np.float64]:

@@ -271,7 +271,12 @@ def _pattern(n_nodes: int, groups: list[tuple[NDArray[np.int64], NDArray[np.int6
     return _Pattern(indptr, indices, bpos, bptr)
 
 
-def stiffness2(mesh: Mesh, material: Material, stabilization: str = "paper") -> sp.csr_matrix:
+def stiffness2(
+    mesh: Mesh,
+    material: Material,
+    stabilization: str = "paper",
+    cells: NDArray[np.int64] | None = None,
+) -> sp.csr_matrix:
     """Assemble ``a_h`` (3.11) of k = 2 on all dofs.
 
     The CSR pattern and the place of every local entry in it come first from the mesh
@@ -281,12 +286,42 @@ def stiffness2(mesh: Mesh, material: Material, stabilization: str = "paper") -> 
     precomputed places, the two columns of a node as one complex number: cache-resident
     batches, no array of all entries). The result is
     the canonical CSR matrix (sorted indices, no duplicates) of the sum of the local
-    matrices.
+    matrices. ``cells`` (ids) assembles the sum over those cells only (one MPI rank's
+    part), in the same global numbering.
     """
     _check_stabilization(stabilization)
     num = numbering2(mesh)
     ndof = num.n_dofs
     groups = _cell_nodes(mesh)
+    if cells is not None:
+        keep = np.zeros(mesh.n_cells, dtype=bool)
+        keep[np.asarray(cells, dtype=np.int64)] = True
+        chosen = [keep[ids] for ids, _verts in mesh.groups.values()]
+        groups = [(v[k], nod[k]) for (v, nod), k in zip(groups, chosen, strict=True)]
+        groups = [g for g in groups if len(g[0])]
+        # the pattern wants every node row filled: the cells' nodes numbered 0, 1, ...
+        used = _unique(np.concatenate([nod.ravel() for _v, nod in groups] + [np.zeros(0, int)]))
+        compact = np.full(ndof // 2, -1, dtype=np.int64)
+        compact[used] = np.arange(len(used))
+        groups = [(v, compact[nod]) for v, nod in groups]
+        if not groups:
+            return sp.csr_matrix((ndof, ndof))
+        local = _stiffness2_nodes(mesh, material, stabilization, groups, 2 * len(used)).tocoo()
+        dof = np.empty(2 * len(used), dtype=np.int64)
+        dof[0::2], dof[1::2] = 2 * used, 2 * used + 1
+        return sp.csr_matrix((local.data, (dof[local.row], dof[local.col])), shape=(ndof, ndof))
+    return _stiffness2_nodes(mesh, material, stabilization, groups, ndof)
+
+
+def _stiffness2_nodes(
+    mesh: Mesh,
+    material: Material,
+    stabilization: str,
+    groups: list[tuple[NDArray[np.int64], NDArray[np.int64]]],
+    ndof: int,
+) -> sp.csr_matrix:
+    """:func:`stiffness2` of the cells of ``groups`` (vertex ids, node ids), on the
+    ``ndof / 2`` nodes that they number (every one in some cell)."""
     pat = _pattern(ndof // 2, groups)
     bstart, blen = pat.bptr[:-1], np.diff(pat.bptr)
     data = np.zeros(len(pat.indices))

@@ -87,7 +87,12 @@ class Space(Protocol):
     @property
     def dof_points(self) -> NDArray[np.float64]: ...
 
-    def stiffness(self, material: Material, stabilization: str = "paper") -> sp.csr_matrix: ...
+    def stiffness(
+        self,
+        material: Material,
+        stabilization: str = "paper",
+        cells: NDArray[np.int64] | None = None,
+    ) -> sp.csr_matrix: ...
 
     def body_force(self, f1: Field, t: float = 0.0) -> NDArray[np.float64]: ...
 
@@ -164,9 +169,15 @@ class P1Space:
         """(n_dofs, 2) the vertex of each dof."""
         return np.repeat(self.mesh.points, 2, axis=0)
 
-    def stiffness(self, material: Material, stabilization: str = "paper") -> sp.csr_matrix:
-        """``a_h`` (3.11) on all dofs (:func:`~vemwear.vem.assembly.stiffness`)."""
-        return stiffness(self.mesh, material, stabilization)
+    def stiffness(
+        self,
+        material: Material,
+        stabilization: str = "paper",
+        cells: NDArray[np.int64] | None = None,
+    ) -> sp.csr_matrix:
+        """``a_h`` (3.11) on all dofs (:func:`~vemwear.vem.assembly.stiffness`), summed
+        over ``cells`` only when given."""
+        return stiffness(self.mesh, material, stabilization, cells)
 
     def body_force(self, f1: Field, t: float = 0.0) -> NDArray[np.float64]:
         """The load of Section 3.3 for k = 1 (vertex averages)."""
@@ -263,10 +274,16 @@ class P2Space:
             centre[:, c] = s / m.cell_sizes
         return np.repeat(np.concatenate([m.points, mid, centre]), 2, axis=0)
 
-    def stiffness(self, material: Material, stabilization: str = "paper") -> sp.csr_matrix:
-        """``a_h`` (3.11) of k = 2 on all dofs (:func:`~vemwear.vem.dofs2.stiffness2`)."""
+    def stiffness(
+        self,
+        material: Material,
+        stabilization: str = "paper",
+        cells: NDArray[np.int64] | None = None,
+    ) -> sp.csr_matrix:
+        """``a_h`` (3.11) of k = 2 on all dofs (:func:`~vemwear.vem.dofs2.stiffness2`),
+        summed over ``cells`` only when given."""
         self._material = material
-        return stiffness2(self.mesh, material, stabilization)
+        return stiffness2(self.mesh, material, stabilization, cells)
 
     def body_force(self, f1: Field, t: float = 0.0) -> NDArray[np.float64]:
         """The load of Section 3.3 for k >= 2 (cell moments against P_0)."""

@@ -96,9 +96,17 @@ class P1Space3D:
         """(n_dofs, 3) the vertex of each dof."""
         return np.repeat(self.mesh.points, 3, axis=0)
 
-    def stiffness(self, material: Material, stabilization: str = "paper") -> sp.csr_matrix:
-        """``a_h`` (3.11) on all dofs (:func:`~vemwear.vem.local3d.stiffness3d`)."""
-        return stiffness3d(self.mesh, material, stabilization, self.rule, geometry=self.cells)
+    def stiffness(
+        self,
+        material: Material,
+        stabilization: str = "paper",
+        cells: NDArray[np.int64] | None = None,
+    ) -> sp.csr_matrix:
+        """``a_h`` (3.11) on all dofs (:func:`~vemwear.vem.local3d.stiffness3d`), summed
+        over ``cells`` only when given."""
+        return stiffness3d(
+            self.mesh, material, stabilization, self.rule, geometry=self.cells, cells=cells
+        )
 
     def body_force(self, f1: Field3, t: float = 0.0) -> NDArray[np.float64]:
         """The load of Section 3.3 for k = 1 (vertex averages)."""

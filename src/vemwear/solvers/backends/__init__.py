@@ -191,6 +191,7 @@ def schur_factorize(
     last: NDArray[np.int64],
     points: NDArray[np.float64],
     backend: str = "auto",
+    assembly: Any = None,
 ) -> SchurFactorization:
     """Factorize SPD ``K`` once, with the block of ``K^{-1}`` on the dofs ``last``.
 
@@ -204,6 +205,10 @@ def schur_factorize(
     last : (c,) dof ids of the Schur block (the contact dofs), in the order wanted
     points : (n, 2) coordinates of each dof's vertex (SuperLU's geometric ordering)
     backend : a name of :data:`BACKENDS`
+    assembly : optional
+        K as a sum over cells (:attr:`vemwear.solvers.system.ContactSystem.assembly`):
+        the petsc backend assembles its distributed matrix from the ranks' cells with
+        it instead of sending K's rows from rank 0; the other backends factorize K.
     """
     chosen = resolve_backend(backend)
     serial = chosen == "pardiso" and backend == "auto" and K.shape[0] < SCHUR_SERIAL_MAX
@@ -215,7 +220,7 @@ def schur_factorize(
         if chosen == "pardiso":
             factor: SchurFactorization = _module("pardiso").PardisoSchur(K, last, points)
         elif chosen == "petsc":
-            factor = _module("petsc").PetscSchur(K, last, points)
+            factor = _module("petsc").PetscSchur(K, last, points, assembly=assembly)
         else:
             factor = _module("scipy").SuperLUSchur(K, last, points)
     if _KEEP:

@@ -5,10 +5,14 @@ outputs) and the other ranks serve its collective linear algebra (:func:`serve`,
 inside :func:`session`): each command starts with a broadcast from rank 0, so that
 every rank takes part in the same factorization and the same solves.
 
-Factorization (:class:`PetscSchur`): rank 0 holds the assembled stiffness and sends
-each rank its block of rows (PETSc's default split of the rows in contiguous blocks);
-PETSc gives the distributed matrix to MUMPS (Cholesky of an SPD matrix) with the
-contact dofs as MUMPS's Schur variables (``MatFactorSetSchurIS``, MUMPS's ICNTL(19)):
+Factorization (:class:`PetscSchur`): the distributed matrix is assembled by the ranks,
+each from the cells of its part of the mesh (:func:`_assemble_by_cells`: rank 0
+partitions the cells and sends the recipe, :class:`vemwear.simulate.cellparts.
+CellAssembly`; a rank owns the rows of its cells, renumbered in contiguous blocks, and
+the interface rows' entries go to their owner); for a matrix given without a recipe
+(the anchored K of load control) rank 0 sends each rank its block of rows. PETSc
+gives the distributed matrix to MUMPS (Cholesky of an SPD matrix) with the contact
+dofs as MUMPS's Schur variables (``MatFactorSetSchurIS``, MUMPS's ICNTL(19)):
 MUMPS factorizes the interior block over all ranks and leaves the dense Schur
 complement ``S = K_cc - K_ci K_ii^{-1} K_ic`` on rank 0, valid in its lower triangle,
 which :func:`.base.compliance_from_schur` inverts as for PARDISO. petsc4py 3.18 does
@@ -202,20 +206,43 @@ def _rank() -> _Rank:
 
 
 class _Local:
-    """One factorization, this rank's part: the solver, its vectors, the row split."""
+    """One factorization, this rank's part: the solver, its vectors, the row split.
 
-    def __init__(self, st: _Rank, n: int) -> None:
+    The rows of the distributed matrix are in contiguous blocks, ``counts[r]`` on rank
+    ``r``; ``order`` (when the matrix was assembled from the ranks' cells) lists the rows
+    of K in the distributed matrix's order, so that each rank owns the rows of its own
+    cells; rank 0 permutes the vectors it scatters and gathers by it.
+    """
+
+    def __init__(
+        self,
+        st: _Rank,
+        n: int,
+        counts: NDArray[np.int64] | None = None,
+        order: NDArray[np.int64] | None = None,
+    ) -> None:
         self.st = st
         self.n = n
         size = st.size
-        self.counts = np.array([n // size + (r < n % size) for r in range(size)])
+        if counts is None:
+            counts = np.array([n // size + (r < n % size) for r in range(size)])
+        self.counts = counts
         self.starts = np.concatenate([[0], np.cumsum(self.counts)])
         self.rows = int(self.counts[st.rank])
+        self.order = order
         self.ksp: Any = None
         self.F: Any = None
         self.b: Any = None
         self.x: Any = None
         self.buf = np.zeros(self.rows)
+
+    def position(self, dofs: NDArray[np.int64]) -> NDArray[np.int64]:
+        """The rows of the distributed matrix of K's rows ``dofs``."""
+        if self.order is None:
+            return dofs
+        at = np.empty(self.n, dtype=np.int64)
+        at[self.order] = np.arange(self.n)
+        return at[dofs]
 
     def interior(self, R: NDArray[np.float64] | None, k: int) -> NDArray[np.float64] | None:
         """``K_ii^{-1} R_i`` column by column (R on rank 0, (n, k)), gathered on rank 0."""
@@ -226,14 +253,17 @@ class _Local:
         for j in range(k):
             if st.rank == 0:
                 assert R is not None
-                col[:] = R[:, j]
+                col[:] = R[:, j] if self.order is None else R[self.order, j]
             st.comm.Scatterv([col, *split] if st.rank == 0 else None, self.buf, root=0)
             self.b.setArray(self.buf)
             self.F.solve(self.b, self.x)
             out = self.x.getArray(readonly=True)
             st.comm.Gatherv(out, [col, *split] if st.rank == 0 else None, root=0)
             if X is not None:
-                X[:, j] = col
+                if self.order is None:
+                    X[:, j] = col
+                else:
+                    X[self.order, j] = col
         return X
 
     def release(self) -> None:
@@ -242,24 +272,35 @@ class _Local:
 
 
 def _factorize(
-    st: _Rank, fid: int, K: sp.csr_matrix | None = None, last: NDArray[np.int64] | None = None
-) -> tuple[NDArray[np.float64], list[int]] | None:
+    st: _Rank,
+    fid: int,
+    K: sp.csr_matrix | None = None,
+    last: NDArray[np.int64] | None = None,
+    assembly: Any = None,
+) -> tuple[NDArray[np.float64], list[int], dict[str, Any]] | None:
     """The collective factorization; returns on rank 0 the Schur complement (Fortran
-    order, lower triangle valid) and the megabytes of MUMPS's factorization on each
-    rank, None elsewhere."""
+    order, lower triangle valid), the megabytes of MUMPS's factorization on each rank
+    and the report of the assembly by cells (:func:`_assemble_by_cells`, empty without
+    ``assembly``), None elsewhere."""
     PETSc, comm = st.PETSc, st.comm
-    head = (K.shape[0], len(last)) if K is not None and last is not None else None
-    n, c = comm.bcast(head, root=0)
-    loc = _Local(st, n)
-    if st.rank == 0:
-        assert K is not None and last is not None
-        for r in range(1, st.size):
-            blk = K[loc.starts[r] : loc.starts[r + 1]]
-            comm.send((blk.indptr, blk.indices, blk.data), dest=r, tag=fid)
-        mine = K[: loc.starts[1]]
-        indptr, indices, data = mine.indptr, mine.indices, mine.data
+    head = None
+    if K is not None and last is not None:
+        head = (K.shape[0], len(last), assembly is not None)
+    n, c, by_cells = comm.bcast(head, root=0)
+    report: dict[str, Any] = {}
+    if by_cells:
+        loc, (indptr, indices, data), report = _assemble_by_cells(st, n, assembly)
     else:
-        indptr, indices, data = comm.recv(source=0, tag=fid)
+        loc = _Local(st, n)
+        if st.rank == 0:
+            assert K is not None and last is not None
+            for r in range(1, st.size):
+                blk = K[loc.starts[r] : loc.starts[r + 1]]
+                comm.send((blk.indptr, blk.indices, blk.data), dest=r, tag=fid)
+            mine = K[: loc.starts[1]]
+            indptr, indices, data = mine.indptr, mine.indices, mine.data
+        else:
+            indptr, indices, data = comm.recv(source=0, tag=fid)
     it = PETSc.IntType
     shape = ((loc.rows, n), (loc.rows, n))
     csr = (indptr.astype(it), indices.astype(it), np.asarray(data, dtype=np.float64))
@@ -274,7 +315,7 @@ def _factorize(
     pc.setFactorSolverType("mumps")
     pc.setFactorSetUpSolverType()
     F = pc.getFactorMatrix()
-    ids = np.asarray(last, dtype=it) if st.rank == 0 else np.zeros(0, dtype=it)
+    ids = np.asarray(loc.position(last), dtype=it) if last is not None else np.zeros(0, dtype=it)
     schur = PETSc.IS().createGeneral(ids, comm=PETSc.COMM_WORLD)
     lib = _library()
     _check(lib.MatFactorSetSchurIS(F.handle, schur.handle), "MatFactorSetSchurIS")
@@ -300,7 +341,72 @@ def _factorize(
     if st.rank != 0 or K_c is None or Y is None or last is None:
         return None
     Sz = K_c[:, last] @ z - K_c @ Y[:, 0]  # K_cc z - K_ci K_ii^{-1} K_ic z
-    return _schur_block(lib, F, c, z, Sz), megabytes
+    return _schur_block(lib, F, c, z, Sz), megabytes, report
+
+
+def _assemble_by_cells(
+    st: _Rank, n: int, assembly: Any
+) -> tuple[_Local, tuple[NDArray, NDArray, NDArray], dict[str, Any]]:
+    """This rank's rows of K, assembled from the cells of its part of the mesh.
+
+    Rank 0 partitions the cells (:meth:`~vemwear.simulate.cellparts.CellAssembly.
+    partition`) and sends the recipe and the partition to every rank; each rank sums
+    its cells' matrices on the free dofs (:meth:`~vemwear.simulate.cellparts.
+    CellAssembly.part`). A row belongs to the lowest rank whose cells touch it, and the
+    rows are renumbered so that each rank owns a contiguous block of them; the entries
+    of rows owned by another rank (the interface with a lower rank's cells) are sent to
+    it and added there. Returns the row split, this rank's rows (CSR over all columns,
+    in the new numbering) and, on rank 0, the report: the partitioner and, per rank,
+    the cells, the rows and the seconds of the cells' assembly.
+    """
+    comm, MPI = st.comm, st.MPI
+    assembly = comm.bcast(assembly, root=0)
+    part, method = comm.bcast(assembly.partition(st.size) if st.rank == 0 else None, root=0)
+    tick = time.perf_counter()
+    mine = np.flatnonzero(part == st.rank)
+    P = assembly.part(mine).tocoo()
+    seconds = time.perf_counter() - tick
+    if P.shape != (n, n):
+        raise RuntimeError(f"the cells' matrix is {P.shape}, the stiffness ({n}, {n})")
+    owner = np.full(n, st.size, dtype=np.int64)
+    owner[P.row] = st.rank
+    comm.Allreduce(MPI.IN_PLACE, owner, op=MPI.MIN)
+    if n and int(owner.max()) >= st.size:
+        raise _InStep("a row of the stiffness that no cell touches (a singular matrix)")
+    order = np.argsort(owner, kind="stable")
+    at = np.empty(n, dtype=np.int64)
+    at[order] = np.arange(n)
+    loc = _Local(st, n, np.bincount(owner, minlength=st.size), order)
+    del owner
+    A = sp.csr_matrix((P.data, (at[P.row], at[P.col])), shape=(n, n))
+    del P, at
+    starts = loc.starts
+    out: list[Any] = []
+    for r in range(st.size):
+        blk = A[starts[r] : starts[r + 1]]
+        out.append((blk.data, blk.indices, blk.indptr) if blk.nnz and r != st.rank else None)
+    own = sp.csr_matrix(A[starts[st.rank] : starts[st.rank + 1]])
+    del A
+    received = comm.alltoall(out)
+    del out
+    for got in received:  # in rank order: every run adds the same way
+        if got is not None:
+            own = own + sp.csr_matrix(got, shape=own.shape)
+    del received
+    own.sum_duplicates()
+    own.sort_indices()
+    seconds_all = time.perf_counter() - tick
+    rows = comm.gather((len(mine), loc.rows, seconds, seconds_all), root=0)
+    report: dict[str, Any] = {}
+    if rows is not None:
+        report = {
+            "partitioner": method,
+            "cells": [r[0] for r in rows],
+            "rows": [r[1] for r in rows],
+            "cell_seconds": [r[2] for r in rows],
+            "seconds": [r[3] for r in rows],
+        }
+    return loc, (own.indptr, own.indices, own.data), report
 
 
 def _schur_block(
@@ -439,18 +545,28 @@ class PetscSchur:
     Made on rank 0 (the other ranks take part through :func:`serve`).
 
     ``megabytes[r]`` is the memory MUMPS's factorization used on rank ``r`` (its
-    INFO(22)).
+    INFO(22)). With ``assembly`` every rank assembles the rows of the distributed
+    matrix from its own cells (:func:`_assemble_by_cells`) and ``assembly_report`` says
+    how: the partitioner, and per rank the cells, the rows and the seconds (of the
+    cells' matrices, and with the exchange of the interface rows); rank 0 then keeps of
+    K only what it reads: the rows of the contact dofs (the block elimination of the
+    solves). Without it, rank 0 sends each rank its block of K's rows.
 
     Parameters
     ----------
     K : (n, n) sparse SPD matrix
     last : (c,) dof ids of the Schur block, in this order
     points : unused (MUMPS orders the matrix itself); accepted for a common signature
+    assembly : optional
+        K as a sum over cells (:class:`vemwear.simulate.cellparts.CellAssembly`), whose
+        parts add up to ``K``.
     """
 
     name = "petsc"
 
-    def __init__(self, K: sp.spmatrix, last: NDArray[np.int64], points: Any = None) -> None:
+    def __init__(
+        self, K: sp.spmatrix, last: NDArray[np.int64], points: Any = None, assembly: Any = None
+    ) -> None:
         st = _rank()
         if st.rank != 0:
             raise RuntimeError("PetscSchur is made on rank 0; the other ranks run serve()")
@@ -470,12 +586,13 @@ class PetscSchur:
         self.timings["ordering"] = time.perf_counter() - tick
         tick = time.perf_counter()
         with st.command("factorize", self.fid):
-            made = _factorize(st, self.fid, K, last)
+            made = _factorize(st, self.fid, K, last, assembly)
         self.timings["factorization"] = time.perf_counter() - tick
         tick = time.perf_counter()
         assert made is not None
-        S, megabytes = made
+        S, megabytes, report = made
         self.megabytes: list[int] = megabytes
+        self.assembly_report: dict[str, Any] = report
         self.S_inv = compliance_from_schur(S, overwrite_s=True)
         del S
         self.timings["schur"] = time.perf_counter() - tick

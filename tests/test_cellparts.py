@@ -1,0 +1,116 @@
+"""The stiffness as a sum over the cells of a partition (the MPI ranks' assembly).
+
+Each rank of an MPI run assembles the part of K of its own cells
+(:class:`vemwear.simulate.cellparts.CellAssembly`); these tests check in one process
+that the parts of every partition add up to the K that the serial run factorizes (2D
+k = 1 and 2, 3D, the rigid parts' ties), that the partitions cover every cell once in
+parts of about equal size, and that the recipe sent to the ranks (pickled) assembles
+the same parts.
+"""
+
+from __future__ import annotations
+
+import copy
+import pickle
+from typing import Any
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from conftest import CONFIG_3D, small_config
+from vemwear.config import parse_config
+from vemwear.config.build import load_config
+from vemwear.mesh.partition import partition_cells
+
+HOLDER: dict[str, Any] = {  # a rigid holder on top: K is Q^T K Q (docs/method.md 1d)
+    "mesh": {"generator": "squares", "size": [1.0, 0.5], "divisions": [12, 6]},
+    "boundary": {
+        "contact": "bottom",
+        "displacement": [{"name": "rollers", "on": ["left", "right"], "ux": 0.0}],
+        "rigid": [{"name": "holder", "on": "top", "fy": "-0.06"}],
+    },
+    "material": {"lam": 4.0, "eta": 4.0},
+    "contact": {
+        "p": {"type": "linear", "c": 1.0},
+        "g": 0.1,
+        "mu": 0.0,
+        "kappa": 0.5,
+        "v_star": [1.0, 0.0],
+    },
+    "time": {"T": 1.0, "steps": 2},
+    "output": {"figures": False, "vtk": False},
+}
+
+
+def _system(case: str, tmp_path: Any) -> Any:
+    if case.startswith("holder"):
+        d = copy.deepcopy(HOLDER)
+        d["vem"] = {"order": int(case[-1])}
+        return parse_config(d, source="c.toml").problem.discrete.system
+    text = {
+        "2d k=1": small_config("p", divisions=(12, 6), steps=2),
+        "2d k=2": small_config("p", divisions=(12, 6), steps=2, vem={"order": 2}),
+        "3d": CONFIG_3D,
+    }[case]
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(text)
+    return load_config(cfg).problem.discrete.system
+
+
+@pytest.mark.parametrize("case", ["2d k=1", "2d k=2", "3d", "holder k=1", "holder k=2"])
+@pytest.mark.parametrize(("parts", "method"), [(2, "metis"), (3, "metis"), (3, "slabs")])
+def test_the_parts_of_a_partition_add_up_to_the_stiffness(
+    tmp_path: Any, case: str, parts: int, method: str
+) -> None:
+    s = _system(case, tmp_path)
+    asm = s.assembly
+    part, used = asm.partition(parts, method)
+    assert used == method
+    assert part.shape == (asm.n_cells,) and set(np.unique(part)) == set(range(parts))
+    pieces = [asm.part(np.flatnonzero(part == r)) for r in range(parts)]
+    total = sum(pieces[1:], pieces[0])
+    scale = abs(s.K).max()
+    assert abs(total - s.K).max() <= 1e-14 * scale
+    # a part is not the whole: each rank's matrix misses the other ranks' cells
+    assert all(abs(p - s.K).max() > 1e-3 * scale for p in pieces)
+    # the recipe that rank 0 sends to the other ranks assembles the same part
+    again = pickle.loads(pickle.dumps(asm)).part(np.flatnonzero(part == 1))
+    assert abs(again - pieces[1]).max() == 0.0
+
+
+@pytest.mark.parametrize("method", ["metis", "slabs"])
+def test_partitions_are_balanced_and_cut_along_facets(method: str) -> None:
+    """64 x 32 squares in 4 parts: equal counts within 3 %, and each part's cells are
+    connected through their edges (no scattered cells: a short interface)."""
+    from vemwear.mesh import rectangle_squares
+
+    mesh = rectangle_squares((2.0, 1.0), (64, 32))
+    part, used = partition_cells(mesh.cell_offsets, mesh.cell_vertices, mesh.points, 4, method)
+    assert used == method
+    counts = np.bincount(part, minlength=4)
+    assert counts.sum() == mesh.n_cells and counts.max() <= 1.03 * mesh.n_cells / 4
+    inc = sp.csr_matrix(
+        (np.ones(len(mesh.cell_vertices)), mesh.cell_vertices, mesh.cell_offsets),
+        shape=(mesh.n_cells, mesh.n_points),
+    )
+    shared = sp.csr_matrix(inc @ inc.T)
+    shared.data[shared.data < 2] = 0.0
+    shared.eliminate_zeros()
+    for r in range(4):
+        ids = np.flatnonzero(part == r)
+        n_comp, _ = sp.csgraph.connected_components(shared[ids][:, ids], directed=False)
+        assert n_comp == 1
+    # the interface: the vertices in cells of two parts, few against the mesh's
+    owners = sp.csr_matrix((np.ones(len(part)), (np.arange(len(part)), part)))
+    per_vertex = (inc.T @ owners).tocsr()
+    shared_vertices = int(np.count_nonzero(np.diff(per_vertex.indptr) > 1))
+    assert shared_vertices <= 0.1 * mesh.n_points
+
+
+def test_an_unknown_partitioner_is_refused() -> None:
+    from vemwear.mesh import rectangle_squares
+
+    mesh = rectangle_squares((2.0, 1.0), (4, 2))
+    with pytest.raises(ValueError, match="unknown partitioner 'chaco'"):
+        partition_cells(mesh.cell_offsets, mesh.cell_vertices, mesh.points, 2, "chaco")
