@@ -4,13 +4,18 @@ For each case (2D: Example 5.2's data on 2n x n squares; 3D: the 3D example's bl
 2n x n x n hexahedra) and each way of factorizing:
 
 * ``petsc N=1``, ``petsc N=2``, ...: ``mpirun -n N`` runs of this script with the
-  petsc backend (rank 0 assembles and sends the rows; MUMPS factorizes over the ranks
-  with the Schur complement on the contact dofs);
+  petsc backend (each rank assembles the stiffness of its own cells into the
+  distributed matrix; MUMPS factorizes over the ranks with the Schur complement on the
+  contact dofs);
+* with ``--rows``, also ``petsc rows N=1``, ...: the distributed matrix made as before,
+  rank 0 sending each rank its block of the rows of the K it assembled;
 * ``pardiso`` (or ``scipy``): the serial default path, :func:`schur_factorize` with
   ``"auto"``, in one process;
 
-the time of each phase: ``assembly`` (mesh, stiffness, rank 0), ``send+factor`` (the
-rows sent to the ranks and MUMPS's analysis and factorization; PARDISO's ordering and
+the time of each phase: ``assembly`` (mesh, stiffness, rank 0), ``distribute`` (the
+making of the distributed matrix, the slowest rank: the recipe and the partition sent,
+each rank's cells' matrices, the interface rows exchanged; or the rows sent),
+``factor`` (MUMPS's analysis and factorization; PARDISO's ordering and
 factorization), ``schur inv`` (the inverse of the dense Schur complement on rank 0), and
 the ``solve/rhs`` of a block of ``--rhs`` right-hand sides (the recovery of u). Every
 process is a fresh one; the cases run interleaved (one of each per round) ``--repeat``
@@ -18,13 +23,16 @@ times and are reported as min / median / max. The floor, measured in the same ro
 is ``pardiso plain``: a plain PARDISO Cholesky factorization of the same matrix (no
 Schur block) and its block solve.
 
-Memory, from the last round: the peak resident memory of each rank (the process
-whole: interpreter, mesh, matrix, factors) and MUMPS's own count of its factorization's
-memory on that rank (INFO(22)), which is the share that falls with N.
+Per rank, min / median / max over the rounds: the seconds of each rank's cells'
+matrices (``cells``) and of its whole part of ``distribute``, and its peak resident
+memory (the process whole: interpreter, mesh, matrix, factors); from the last round,
+the cells and rows of each rank and MUMPS's own count of its factorization's memory
+on that rank (INFO(22)), which is the share that falls with N.
 
 Usage::
 
     python benchmarks/bench_petsc.py --case 2d:128 3d:24 --ranks 1 2 --repeat 3
+    python benchmarks/bench_petsc.py --case 2d:128 3d:16 --ranks 1 2 --rows --no-serial
     python benchmarks/bench_petsc.py --mpirun "mpirun --allow-run-as-root --oversubscribe"
 
 The script must run with a Python in which petsc4py and mpi4py import (docs/mpi.md).
@@ -45,7 +53,9 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-PHASES = ("assembly", "send+factor", "schur inv", "solve/rhs ms")
+PHASES = ("assembly", "distribute", "factor", "schur inv", "solve/rhs ms")
+#: per rank, over the rounds
+PER_RANK = ("cells s", "distribute s", "peak MB")
 
 CONFIG_2D = """\
 title = "bench 2d"
@@ -117,7 +127,7 @@ def _system(case: str):
         cfg = load_config(path)
         s = cfg.problem.discrete.system
         cd = s.contact_dofs.ravel()
-        return s.K, cd[cd >= 0], s.dof_points
+        return s.K, cd[cd >= 0], s.dof_points, s.assembly
 
 
 def worker(case: str, method: str, rhs: int) -> None:
@@ -125,13 +135,16 @@ def worker(case: str, method: str, rhs: int) -> None:
     import numpy as np
 
     row: dict = {}
-    if method == "petsc":
+    if method.startswith("petsc"):
         from vemwear.solvers.backends.petsc import PetscSchur, _rank, serve, session
 
+        by_cells = method == "petsc"
         st = _rank()
         with session() as root:
             if root:
-                row = _measure(case, rhs, lambda K, c, p: PetscSchur(K, c, p))
+                row = _measure(
+                    case, rhs, lambda K, c, p, a: PetscSchur(K, c, p, a if by_cells else None)
+                )
             else:
                 serve()
         peaks = st.comm.gather(_peak_mb(), root=0)
@@ -144,11 +157,11 @@ def worker(case: str, method: str, rhs: int) -> None:
 
         if method == "pardiso plain":
 
-            def make(K, c, p):
+            def make(K, c, p, a):
                 return PardisoFactor(K, spd=True)
         else:
 
-            def make(K, c, p):
+            def make(K, c, p, a):
                 return schur_factorize(K, c, p, "auto")
 
         row = _measure(case, rhs, make)
@@ -161,14 +174,21 @@ def _measure(case: str, rhs: int, make) -> dict:
     import numpy as np
 
     t = time.perf_counter()
-    K, contact, points = _system(case)
+    K, contact, points, assembly = _system(case)
     row: dict = {"assembly": time.perf_counter() - t, "n": K.shape[0], "c": len(contact)}
     t = time.perf_counter()
-    f = make(K, contact, points)
+    f = make(K, contact, points, assembly)
     total = time.perf_counter() - t
     schur = getattr(f, "timings", {}).get("schur", 0.0)
-    row["send+factor"] = total - schur
+    report = getattr(f, "assembly_report", {})
+    row["distribute"] = max(report.get("seconds", [0.0]))
+    row["factor"] = total - schur - row["distribute"]
     row["schur inv"] = schur
+    row["distribute s"] = report.get("seconds", [0.0])
+    row["cells s"] = report.get("cell_seconds", [])
+    row["cells"] = report.get("cells", [])
+    row["rows"] = report.get("rows", [])
+    row["partitioner"] = report.get("partitioner", "-")
     B = np.random.default_rng(0).normal(size=(K.shape[0], rhs))
     t = time.perf_counter()
     X = f.solve(B)
@@ -183,6 +203,18 @@ def _stats(v: list[float]) -> str:
     return f"{min(v):8.3f} {statistics.median(v):8.3f} {max(v):8.3f}"
 
 
+def _per_rank(times: dict, name: str) -> str:
+    """``min/median/max`` of each rank's values of ``name`` over the rounds."""
+    rounds = times.get(name, [])
+    if not rounds or not rounds[0]:
+        return "-"
+    ranks = zip(*rounds, strict=True)
+    fmt = ".0f" if name == "peak MB" else ".3f"
+    return " | ".join(
+        "/".join(format(x, fmt) for x in (min(v), statistics.median(v), max(v))) for v in ranks
+    )
+
+
 def _tables(times: dict, last: dict) -> None:
     print("Time per phase [s] (solve: ms per right-hand side), min / median / max")
     head = "".join(f" {p + ': min median max':>29}" for p in PHASES)
@@ -191,13 +223,16 @@ def _tables(times: dict, last: dict) -> None:
         row = last[(case, name)]
         cells = "".join(f" {_stats(ph[p]):>29}" for p in PHASES)
         print(f"{case:<8} {row['n']:9d} {row['c']:7d} {name:<15}{cells}")
-    print("Memory per rank [MB] (last round): peak resident | MUMPS INFO(22)")
-    for (case, name), row in last.items():
-        peaks = " ".join(f"{m:7.0f}" for m in row["peak MB"])
-        mumps = " ".join(f"{m:7d}" for m in row["MUMPS MB"]) or "-"
-        print(
-            f"{case:<8} {name:<15} peak {peaks} | MUMPS {mumps}  (residual {row['residual']:.1e})"
-        )
+    print("Per rank (rank 0 | rank 1 | ...), min/median/max over the rounds:")
+    for (case, name), ph in times.items():
+        row = last[(case, name)]
+        print(f"{case:<8} {name:<15} partitioner {row['partitioner']}")
+        for p in PER_RANK:
+            print(f"{'':<24} {p:<13} {_per_rank(ph, p)}")
+        mumps = " | ".join(str(m) for m in row["MUMPS MB"]) or "-"
+        print(f"{'':<24} {'cells':<13} {' | '.join(map(str, row['cells'])) or '-'}")
+        print(f"{'':<24} {'rows':<13} {' | '.join(map(str, row['rows'])) or '-'}")
+        print(f"{'':<24} {'MUMPS MB':<13} {mumps}  (residual {row['residual']:.1e})")
     sys.stdout.flush()
 
 
@@ -210,22 +245,33 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--rhs", type=int, default=8, help="columns of the block solve")
     ap.add_argument("--mpirun", default="mpirun --allow-run-as-root --oversubscribe")
+    ap.add_argument(
+        "--rows", action="store_true", help="also the rows sent by rank 0 (the former path)"
+    )
+    ap.add_argument(
+        "--no-serial", action="store_true", help="leave out the serial default and its floor"
+    )
     ap.add_argument("--worker", nargs=2, metavar=("CASE", "METHOD"), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.worker:
         worker(a.worker[0], a.worker[1], a.rhs)
         return 0
     me = [sys.executable, os.path.abspath(__file__), "--rhs", str(a.rhs), "--worker"]
-    runs: dict[str, list[str]] = {"default (auto)": [], "pardiso plain": []}
+    runs: dict[str, list[str]] = {}
+    if not a.no_serial:
+        runs.update({"default (auto)": [], "pardiso plain": []})
     for n in a.ranks:
         runs[f"petsc N={n}"] = [*shlex.split(a.mpirun), "-n", str(n)]
+        if a.rows:
+            runs[f"petsc rows N={n}"] = runs[f"petsc N={n}"]
     times: dict[tuple[str, str], dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
     last: dict[tuple[str, str], dict] = {}
     for r in range(a.repeat):
         for case in a.case:
             for name, prefix in runs.items():
-                method = "petsc" if name.startswith("petsc") else name
-                method = "auto" if method == "default (auto)" else method
+                method = {"default (auto)": "auto"}.get(name, name)
+                if name.startswith("petsc"):
+                    method = "petsc-rows" if "rows" in name else "petsc"
                 done = subprocess.run(
                     [*prefix, *me, case, method], capture_output=True, text=True, check=False
                 )
@@ -234,7 +280,7 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"{case} {name}: failed\n{done.stdout}\n{done.stderr}", file=sys.stderr)
                     return 1
                 row = json.loads(lines[-1][7:])
-                for p in PHASES:
+                for p in PHASES + PER_RANK:
                     times[(case, name)][p].append(row[p])
                 last[(case, name)] = row
         print(f"\n== after round {r + 1} of {a.repeat}", flush=True)

@@ -280,8 +280,9 @@ def _factorize(
 ) -> tuple[NDArray[np.float64], list[int], dict[str, Any]] | None:
     """The collective factorization; returns on rank 0 the Schur complement (Fortran
     order, lower triangle valid), the megabytes of MUMPS's factorization on each rank
-    and the report of the assembly by cells (:func:`_assemble_by_cells`, empty without
-    ``assembly``), None elsewhere."""
+    and the report of the distributed matrix's making (:func:`_assemble_by_cells`;
+    without ``assembly``, the seconds of the rows' sending and receiving on each rank),
+    None elsewhere."""
     PETSc, comm = st.PETSc, st.comm
     head = None
     if K is not None and last is not None:
@@ -291,6 +292,7 @@ def _factorize(
     if by_cells:
         loc, (indptr, indices, data), report = _assemble_by_cells(st, n, assembly)
     else:
+        tick = time.perf_counter()
         loc = _Local(st, n)
         if st.rank == 0:
             assert K is not None and last is not None
@@ -301,6 +303,8 @@ def _factorize(
             indptr, indices, data = mine.indptr, mine.indices, mine.data
         else:
             indptr, indices, data = comm.recv(source=0, tag=fid)
+        seconds = comm.gather(time.perf_counter() - tick, root=0)
+        report = {"partitioner": "rows", "seconds": seconds} if seconds is not None else {}
     it = PETSc.IntType
     shape = ((loc.rows, n), (loc.rows, n))
     csr = (indptr.astype(it), indices.astype(it), np.asarray(data, dtype=np.float64))
@@ -352,11 +356,12 @@ def _assemble_by_cells(
     Rank 0 partitions the cells (:meth:`~vemwear.simulate.cellparts.CellAssembly.
     partition`) and sends the recipe and the partition to every rank; each rank sums
     its cells' matrices on the free dofs (:meth:`~vemwear.simulate.cellparts.
-    CellAssembly.part`). A row belongs to the lowest rank whose cells touch it, and the
-    rows are renumbered so that each rank owns a contiguous block of them; the entries
-    of rows owned by another rank (the interface with a lower rank's cells) are sent to
-    it and added there. Returns the row split, this rank's rows (CSR over all columns,
-    in the new numbering) and, on rank 0, the report: the partitioner and, per rank,
+    CellAssembly.part`). A row belongs to a rank whose cells touch it (the lowest or
+    the highest such rank, for even and odd rows), and the rows are renumbered so that
+    each rank owns a contiguous block of them; the entries of rows owned by another rank
+    (the interface with another rank's cells) are sent to it and added there. Returns
+    the row split, this rank's rows (CSR over all columns, in the new numbering) and,
+    on rank 0, the report: the partitioner and, per rank,
     the cells, the rows and the seconds of the cells' assembly.
     """
     comm, MPI = st.comm, st.MPI
@@ -368,11 +373,18 @@ def _assemble_by_cells(
     seconds = time.perf_counter() - tick
     if P.shape != (n, n):
         raise RuntimeError(f"the cells' matrix is {P.shape}, the stiffness ({n}, {n})")
-    owner = np.full(n, st.size, dtype=np.int64)
-    owner[P.row] = st.rank
-    comm.Allreduce(MPI.IN_PLACE, owner, op=MPI.MIN)
-    if n and int(owner.max()) >= st.size:
+    low = np.full(n, st.size, dtype=np.int64)
+    low[P.row] = st.rank
+    comm.Allreduce(MPI.IN_PLACE, low, op=MPI.MIN)
+    if n and int(low.max()) >= st.size:
         raise _InStep("a row of the stiffness that no cell touches (a singular matrix)")
+    high = np.full(n, -1, dtype=np.int64)
+    high[P.row] = st.rank
+    comm.Allreduce(MPI.IN_PLACE, high, op=MPI.MAX)
+    # an interface row goes to the lowest or the highest rank whose cells touch it, in
+    # turn: the interfaces' rows are shared, not all given to the lower rank
+    owner = np.where(np.arange(n) % 2 == 0, low, high)
+    del low, high
     order = np.argsort(owner, kind="stable")
     at = np.empty(n, dtype=np.int64)
     at[order] = np.arange(n)
@@ -548,9 +560,9 @@ class PetscSchur:
     INFO(22)). With ``assembly`` every rank assembles the rows of the distributed
     matrix from its own cells (:func:`_assemble_by_cells`) and ``assembly_report`` says
     how: the partitioner, and per rank the cells, the rows and the seconds (of the
-    cells' matrices, and with the exchange of the interface rows); rank 0 then keeps of
-    K only what it reads: the rows of the contact dofs (the block elimination of the
-    solves). Without it, rank 0 sends each rank its block of K's rows.
+    cells' matrices, and with the exchange of the interface rows). Without it, rank 0
+    sends each rank its block of K's rows (``assembly_report``: partitioner ``"rows"``
+    and the seconds of each rank).
 
     Parameters
     ----------
