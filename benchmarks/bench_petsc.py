@@ -130,7 +130,7 @@ def _system(case: str):
         return s.K, cd[cd >= 0], s.dof_points, s.assembly
 
 
-def worker(case: str, method: str, rhs: int) -> None:
+def worker(case: str, method: str, rhs: int, partition: str = "rows") -> None:
     """One measurement (this process, or rank 0 of an MPI job): prints a JSON line."""
     import numpy as np
 
@@ -143,7 +143,9 @@ def worker(case: str, method: str, rhs: int) -> None:
         with session() as root:
             if root:
                 row = _measure(
-                    case, rhs, lambda K, c, p, a: PetscSchur(K, c, p, a if by_cells else None)
+                    case,
+                    rhs,
+                    lambda K, c, p, a: PetscSchur(K, c, p, a if by_cells else None, partition),
                 )
             else:
                 serve()
@@ -251,12 +253,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--no-serial", action="store_true", help="leave out the serial default and its floor"
     )
+    ap.add_argument(
+        "--partition",
+        default="rows",
+        choices=("rows", "metis", "slabs"),
+        help="the split of the cells over the ranks (PetscSchur's partition)",
+    )
     ap.add_argument("--worker", nargs=2, metavar=("CASE", "METHOD"), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.worker:
-        worker(a.worker[0], a.worker[1], a.rhs)
+        worker(a.worker[0], a.worker[1], a.rhs, a.partition)
         return 0
-    me = [sys.executable, os.path.abspath(__file__), "--rhs", str(a.rhs), "--worker"]
+    me = [sys.executable, os.path.abspath(__file__), "--rhs", str(a.rhs)]
+    me += ["--partition", a.partition, "--worker"]
     runs: dict[str, list[str]] = {}
     if not a.no_serial:
         runs.update({"default (auto)": [], "pardiso plain": []})

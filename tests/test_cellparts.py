@@ -59,7 +59,9 @@ def _system(case: str, tmp_path: Any) -> Any:
 
 
 @pytest.mark.parametrize("case", ["2d k=1", "2d k=2", "3d", "holder k=1", "holder k=2"])
-@pytest.mark.parametrize(("parts", "method"), [(2, "metis"), (3, "metis"), (3, "slabs")])
+@pytest.mark.parametrize(
+    ("parts", "method"), [(2, "rows"), (3, "rows"), (2, "metis"), (3, "metis"), (3, "slabs")]
+)
 def test_the_parts_of_a_partition_add_up_to_the_stiffness(
     tmp_path: Any, case: str, parts: int, method: str
 ) -> None:
@@ -106,6 +108,25 @@ def test_partitions_are_balanced_and_cut_along_facets(method: str) -> None:
     per_vertex = (inc.T @ owners).tocsr()
     shared_vertices = int(np.count_nonzero(np.diff(per_vertex.indptr) > 1))
     assert shared_vertices <= 0.1 * mesh.n_points
+
+
+@pytest.mark.parametrize("case", ["2d k=1", "2d k=2", "3d"])
+def test_the_row_split_follows_the_numbering_of_k(tmp_path: Any, case: str) -> None:
+    """``"rows"``: the cells in the order of their vertices' first row of K, in parts of
+    equal count (the ranks' cells then follow the contiguous blocks of K's rows)."""
+    asm = _system(case, tmp_path).assembly
+    part, used = asm.partition(3, "rows")
+    assert used == "rows"
+    mesh = asm.space.mesh
+    if case == "3d":
+        offsets, vertices = mesh.cell_vertex_offsets, mesh.cell_vertex_ids
+    else:
+        offsets, vertices = mesh.cell_offsets, mesh.cell_vertices
+    first_dof = asm.space.dim * np.minimum.reduceat(vertices, offsets[:-1])
+    row = np.searchsorted(asm.free, first_dof)
+    assert np.all(np.diff(part[np.argsort(row, kind="stable")]) >= 0)  # monotone in row
+    counts = np.bincount(part, minlength=3)
+    assert counts.max() - counts.min() <= 1 and counts.sum() == mesh.n_cells
 
 
 def test_an_unknown_partitioner_is_refused() -> None:

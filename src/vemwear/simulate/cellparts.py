@@ -46,14 +46,32 @@ class CellAssembly:
         return int(self.space.mesh.n_cells)
 
     def partition(self, parts: int, method: str = "auto") -> tuple[NDArray[np.int64], str]:
-        """The part of every cell (:func:`~vemwear.mesh.partition.partition_cells`) and
-        the partitioner used."""
+        """The part of every cell and the partitioner used.
+
+        ``method = "rows"``: the cells in the order of the first row of K (the first
+        free dof) of their vertices, cut in parts of equal count: the parts follow K's
+        own numbering (on the generators' meshes, numbered lexicographically, slabs), so
+        that the contiguous blocks of K's rows that PETSc gives the ranks are mostly
+        those of their own cells (for k = 2, whose edge and cell dofs come after all
+        vertex dofs, only the vertex rows). Other methods: :func:`~vemwear.mesh.
+        partition.partition_cells` (``"auto"``: METIS when pymetis imports, else slabs).
+        """
         mesh = self.space.mesh
         if hasattr(mesh, "cell_vertex_ids"):  # 3D: the distinct vertices of each cell
             offsets, vertices = mesh.cell_vertex_offsets, mesh.cell_vertex_ids
         else:
             offsets, vertices = mesh.cell_offsets, mesh.cell_vertices
-        return partition_cells(offsets, vertices, mesh.points, parts, method)
+        if method != "rows":
+            return partition_cells(offsets, vertices, mesh.points, parts, method)
+        n, d = len(self.free), int(self.space.dim)
+        # the first free row at or after each vertex's first dof (a vertex whose dofs are
+        # all constrained takes the next free one: a place in the numbering all the same)
+        first = np.minimum(np.searchsorted(self.free, d * np.arange(len(mesh.points))), n - 1)
+        cell_first = np.minimum.reduceat(first[vertices], offsets[:-1])
+        order = np.argsort(cell_first, kind="stable")
+        part = np.empty(len(order), dtype=np.int64)
+        part[order] = np.arange(len(order)) * parts // max(len(order), 1)
+        return part, "rows"
 
     def part(self, cells: NDArray[np.int64]) -> sp.csr_matrix:
         """The sum of the ``cells``' matrices on the free dofs, (n, n)."""

@@ -277,6 +277,7 @@ def _factorize(
     K: sp.csr_matrix | None = None,
     last: NDArray[np.int64] | None = None,
     assembly: Any = None,
+    partition: str = "rows",
 ) -> tuple[NDArray[np.float64], list[int], dict[str, Any]] | None:
     """The collective factorization; returns on rank 0 the Schur complement (Fortran
     order, lower triangle valid), the megabytes of MUMPS's factorization on each rank
@@ -286,11 +287,11 @@ def _factorize(
     PETSc, comm = st.PETSc, st.comm
     head = None
     if K is not None and last is not None:
-        head = (K.shape[0], len(last), assembly is not None)
-    n, c, by_cells = comm.bcast(head, root=0)
+        head = (K.shape[0], len(last), assembly is not None, partition)
+    n, c, by_cells, partition = comm.bcast(head, root=0)
     report: dict[str, Any] = {}
     if by_cells:
-        loc, (indptr, indices, data), report = _assemble_by_cells(st, n, assembly)
+        loc, (indptr, indices, data), report = _assemble_by_cells(st, n, assembly, partition)
     else:
         tick = time.perf_counter()
         loc = _Local(st, n)
@@ -349,49 +350,60 @@ def _factorize(
 
 
 def _assemble_by_cells(
-    st: _Rank, n: int, assembly: Any
+    st: _Rank, n: int, assembly: Any, partition: str
 ) -> tuple[_Local, tuple[NDArray, NDArray, NDArray], dict[str, Any]]:
     """This rank's rows of K, assembled from the cells of its part of the mesh.
 
     Rank 0 partitions the cells (:meth:`~vemwear.simulate.cellparts.CellAssembly.
-    partition`) and sends the recipe and the partition to every rank; each rank sums
-    its cells' matrices on the free dofs (:meth:`~vemwear.simulate.cellparts.
-    CellAssembly.part`). A row belongs to a rank whose cells touch it (the lowest or
-    the highest such rank, for even and odd rows), and the rows are renumbered so that
-    each rank owns a contiguous block of them; the entries of rows owned by another rank
-    (the interface with another rank's cells) are sent to it and added there. Returns
-    the row split, this rank's rows (CSR over all columns, in the new numbering) and,
-    on rank 0, the report: the partitioner and, per rank,
-    the cells, the rows and the seconds of the cells' assembly.
+    partition`, by ``partition``) and sends the recipe and the partition to every rank;
+    each rank sums its cells' matrices on the free dofs (:meth:`~vemwear.simulate.
+    cellparts.CellAssembly.part`).
+
+    The rows: with ``partition = "rows"`` (the cells split by the contiguous row blocks
+    of K's own numbering) the distributed matrix is K in that numbering, the one the
+    serial backends factorize. With ``"metis"`` or ``"slabs"`` a row belongs to a rank
+    whose cells touch it (the lowest or the highest such rank, for even and odd rows)
+    and the rows are renumbered so that each rank owns a contiguous block of them. Either
+    way, the entries of rows owned by another rank (the interface with its cells) are
+    sent to it and added there. Returns the row split, this rank's rows (CSR over all
+    columns, in the distributed numbering) and, on rank 0, the report: the partitioner
+    and, per rank, the cells, the rows and the seconds of the cells' assembly.
     """
     comm, MPI = st.comm, st.MPI
     assembly = comm.bcast(assembly, root=0)
-    part, method = comm.bcast(assembly.partition(st.size) if st.rank == 0 else None, root=0)
+    part, method = comm.bcast(
+        assembly.partition(st.size, partition) if st.rank == 0 else None, root=0
+    )
     tick = time.perf_counter()
     mine = np.flatnonzero(part == st.rank)
     P = assembly.part(mine).tocoo()
     seconds = time.perf_counter() - tick
     if P.shape != (n, n):
         raise RuntimeError(f"the cells' matrix is {P.shape}, the stiffness ({n}, {n})")
-    low = np.full(n, st.size, dtype=np.int64)
-    low[P.row] = st.rank
-    comm.Allreduce(MPI.IN_PLACE, low, op=MPI.MIN)
-    if n and int(low.max()) >= st.size:
-        raise _InStep("a row of the stiffness that no cell touches (a singular matrix)")
-    high = np.full(n, -1, dtype=np.int64)
-    high[P.row] = st.rank
-    comm.Allreduce(MPI.IN_PLACE, high, op=MPI.MAX)
-    # an interface row goes to the lowest or the highest rank whose cells touch it, in
-    # turn: the interfaces' rows are shared, not all given to the lower rank
-    owner = np.where(np.arange(n) % 2 == 0, low, high)
-    del low, high
-    order = np.argsort(owner, kind="stable")
-    at = np.empty(n, dtype=np.int64)
-    at[order] = np.arange(n)
-    loc = _Local(st, n, np.bincount(owner, minlength=st.size), order)
-    del owner
-    A = sp.csr_matrix((P.data, (at[P.row], at[P.col])), shape=(n, n))
-    del P, at
+    if method == "rows":
+        loc = _Local(st, n)
+        A = sp.csr_matrix((P.data, (P.row, P.col)), shape=(n, n))
+        del P
+    else:
+        low = np.full(n, st.size, dtype=np.int64)
+        low[P.row] = st.rank
+        comm.Allreduce(MPI.IN_PLACE, low, op=MPI.MIN)
+        if n and int(low.max()) >= st.size:
+            raise _InStep("a row of the stiffness that no cell touches (a singular matrix)")
+        high = np.full(n, -1, dtype=np.int64)
+        high[P.row] = st.rank
+        comm.Allreduce(MPI.IN_PLACE, high, op=MPI.MAX)
+        # an interface row goes to the lowest or the highest rank whose cells touch it,
+        # in turn: the interfaces' rows are shared, not all given to the lower rank
+        owner = np.where(np.arange(n) % 2 == 0, low, high)
+        del low, high
+        order = np.argsort(owner, kind="stable")
+        at = np.empty(n, dtype=np.int64)
+        at[order] = np.arange(n)
+        loc = _Local(st, n, np.bincount(owner, minlength=st.size), order)
+        del owner
+        A = sp.csr_matrix((P.data, (at[P.row], at[P.col])), shape=(n, n))
+        del P, at
     starts = loc.starts
     out: list[Any] = []
     for r in range(st.size):
@@ -401,10 +413,21 @@ def _assemble_by_cells(
     del A
     received = comm.alltoall(out)
     del out
-    for got in received:  # in rank order: every run adds the same way
-        if got is not None:
-            own = own + sp.csr_matrix(got, shape=own.shape)
+    # added as triplets, this rank's first, then in rank order: the same sums in every
+    # run, and the entries that cancel stay in the pattern (a sparse sum would drop
+    # them, and MUMPS orders the pattern that is left much worse: the dofs of a vertex
+    # no longer share their columns; 3D: several times the factor's memory)
+    parts = [own.tocoo()]
+    parts += [sp.csr_matrix(got, shape=own.shape).tocoo() for got in received if got is not None]
     del received
+    own = sp.csr_matrix(
+        (
+            np.concatenate([q.data for q in parts]),
+            (np.concatenate([q.row for q in parts]), np.concatenate([q.col for q in parts])),
+        ),
+        shape=own.shape,
+    )
+    del parts
     own.sum_duplicates()
     own.sort_indices()
     seconds_all = time.perf_counter() - tick
@@ -572,12 +595,24 @@ class PetscSchur:
     assembly : optional
         K as a sum over cells (:class:`vemwear.simulate.cellparts.CellAssembly`), whose
         parts add up to ``K``.
+    partition : {"rows", "metis", "slabs"}
+        How the cells are split over the ranks with ``assembly``: ``"rows"`` (the
+        default) by the contiguous row blocks of K's own numbering, so that MUMPS
+        orders the matrix of the serial run (its ordering with a Schur block is AMD,
+        which depends on the numbering: renumbered to METIS's parts, the 3D factor took
+        1.3 times the memory, docs/mpi.md); ``"metis"``/``"slabs"``: the cells by
+        :func:`vemwear.mesh.partition.partition_cells` and the rows renumbered to them.
     """
 
     name = "petsc"
 
     def __init__(
-        self, K: sp.spmatrix, last: NDArray[np.int64], points: Any = None, assembly: Any = None
+        self,
+        K: sp.spmatrix,
+        last: NDArray[np.int64],
+        points: Any = None,
+        assembly: Any = None,
+        partition: str = "rows",
     ) -> None:
         st = _rank()
         if st.rank != 0:
@@ -598,7 +633,7 @@ class PetscSchur:
         self.timings["ordering"] = time.perf_counter() - tick
         tick = time.perf_counter()
         with st.command("factorize", self.fid):
-            made = _factorize(st, self.fid, K, last, assembly)
+            made = _factorize(st, self.fid, K, last, assembly, partition)
         self.timings["factorization"] = time.perf_counter() - tick
         tick = time.perf_counter()
         assert made is not None
