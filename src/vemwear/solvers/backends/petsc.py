@@ -376,15 +376,15 @@ def _assemble_by_cells(
     )
     tick = time.perf_counter()
     mine = np.flatnonzero(part == st.rank)
-    P = assembly.part(mine).tocoo()
+    A = sp.csr_matrix(assembly.part(mine))
     seconds = time.perf_counter() - tick
-    if P.shape != (n, n):
-        raise RuntimeError(f"the cells' matrix is {P.shape}, the stiffness ({n}, {n})")
-    if method == "rows":
+    if A.shape != (n, n):
+        raise RuntimeError(f"the cells' matrix is {A.shape}, the stiffness ({n}, {n})")
+    if method == "rows":  # K's own numbering: the part as it is
         loc = _Local(st, n)
-        A = sp.csr_matrix((P.data, (P.row, P.col)), shape=(n, n))
-        del P
     else:
+        P = A.tocoo()
+        del A
         low = np.full(n, st.size, dtype=np.int64)
         low[P.row] = st.rank
         comm.Allreduce(MPI.IN_PLACE, low, op=MPI.MIN)
@@ -417,16 +417,17 @@ def _assemble_by_cells(
     # run, and the entries that cancel stay in the pattern (a sparse sum would drop
     # them, and MUMPS orders the pattern that is left much worse: the dofs of a vertex
     # no longer share their columns; 3D: several times the factor's memory)
-    parts = [own.tocoo()]
-    parts += [sp.csr_matrix(got, shape=own.shape).tocoo() for got in received if got is not None]
+    parts = [sp.csr_matrix(got, shape=own.shape).tocoo() for got in received if got is not None]
     del received
-    own = sp.csr_matrix(
-        (
-            np.concatenate([q.data for q in parts]),
-            (np.concatenate([q.row for q in parts]), np.concatenate([q.col for q in parts])),
-        ),
-        shape=own.shape,
-    )
+    if parts:
+        parts.insert(0, own.tocoo())
+        own = sp.csr_matrix(
+            (
+                np.concatenate([q.data for q in parts]),
+                (np.concatenate([q.row for q in parts]), np.concatenate([q.col for q in parts])),
+            ),
+            shape=own.shape,
+        )
     del parts
     own.sum_duplicates()
     own.sort_indices()
