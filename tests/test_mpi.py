@@ -309,6 +309,8 @@ def test_each_rank_assembles_the_cells_of_its_part(
     that matrix gives the serial Schur block and solves ("rows": the run's own
     factorization; "metis", "slabs": the rows renumbered to the parts)."""
     _need_mpi()
+    if partition == "metis":
+        pytest.importorskip("pymetis")  # the extra 'mpi', installed by .ci/run
     text = {
         "2d": CONFIG_2D,
         "2d k=2": small_config("mpi k=2", divisions=(16, 8), steps=2, vem={"order": 2}),
