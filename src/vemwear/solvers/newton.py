@@ -146,9 +146,8 @@ class CondensedNewton:
                 )
             Nc = system.N[:, cols].toarray()
             CN = self.factor.S_inv @ Nc.T
-            self.C_NN = Nc @ CN
-            self.C_NT = system.Tau[:, cols].toarray() @ CN
-            self.C_NT = np.ascontiguousarray(self.C_NT.T)  # N C Tau^T, (m, r m)
+            C_NN = Nc @ CN
+            C_NT = [(system.Tau[:, cols].toarray() @ CN).T]  # N C Tau^T, (m, r m)
         else:
             free = cd >= 0  # prescribed components of contact nodes are not unknowns
             if self.rigid is None:
@@ -163,19 +162,24 @@ class CondensedNewton:
                 full[np.ix_(free, free)] = self.factor.S_inv
                 C = full.reshape(m, k, m, k)
             nu, tau = system.normals, system.tangents
-            self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
-            if system.rows == 1:
-                self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
-            else:  # one block per friction row, from the same block C of K^{-1}
-                self.C_NT = np.hstack(
-                    [np.einsum("ai,aibj,bj->ab", nu, C, t) for t in tau.reshape(-1, m, k)]
-                )
+            C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
+            # one block per friction row, from the same block C of K^{-1}
+            C_NT = [np.einsum("ai,aibj,bj->ab", nu, C, t) for t in tau.reshape(-1, m, k)]
         w = system.weights
         r = system.rows
-        self.A_norm = self.C_NN * w[None, :]
-        # C_NT W: the friction term is T_fric Fric
-        self.T_fric = self.C_NT * system.tile_rows(w)[None, :]
-        self.H = np.hstack([self.C_NN, self.C_NT])  # one product per iteration
+        # H = [C_NN, C_NT], one product per iteration, holds the blocks (views of it),
+        # and HW = H W holds A_norm = C_NN W and T_fric = C_NT W (the friction term is
+        # T_fric Fric): two (m, (1 + r) m) arrays, each block made and copied in turn
+        self.H = np.empty((m, (1 + r) * m))
+        self.C_NN, self.C_NT = self.H[:, :m], self.H[:, m:]
+        self.C_NN[...] = C_NN
+        del C_NN
+        for j, block in enumerate(C_NT):
+            width = block.shape[1]
+            self.C_NT[:, j * width : (j + 1) * width] = block
+        del C_NT
+        HW = np.multiply(self.H, np.concatenate([w, system.tile_rows(w)])[None, :])
+        self.A_norm, self.T_fric = HW[:, :m], HW[:, m:]
         self._x = np.zeros((1 + r) * m)  # work arrays of the iteration, and views of parts
         self._x_n, self._x_t = self._x[:m], self._x[m:]
         self._x_rows = self._x_t.reshape(r, m)
