@@ -68,15 +68,15 @@ class _ReducedMatrix:
     friction where slopes are nonzero) and kept while those stay the same.
     """
 
-    def __init__(self, A_fric, A_norm, active, dp, fric, total=None) -> None:
+    def __init__(self, A_fric, norm_active, active, dp, fric, total=None) -> None:
         self.active = active
         self.dp = dp
         # the friction enters only through the columns with a nonzero slope, and with
         # friction on the whole pressure through the active columns of those nodes
         on_rigid = total is not None and bool(np.any(active & total))
         self.fric = fric if np.any(dp[~active]) or on_rigid else None
-        Mat = A_fric * dp[None, :]
-        Mat[:, active] = A_norm[:, active]
+        Mat = np.multiply(A_fric, dp[None, :], order="F")  # LAPACK's order: no copy
+        Mat[:, active] = norm_active  # the active columns of C_NN W
         if on_rigid:  # d R / d p_rigid = C_NN W + C_NT W Fric at those nodes
             Mat[:, active & total] = A_fric[:, active & total]
         inactive = np.flatnonzero(~active)
@@ -168,8 +168,8 @@ class CondensedNewton:
         w = system.weights
         r = system.rows
         # H = [C_NN, C_NT], one product per iteration, holds the blocks (views of it),
-        # and HW = H W holds A_norm = C_NN W and T_fric = C_NT W (the friction term is
-        # T_fric Fric): two (m, (1 + r) m) arrays, each block made and copied in turn
+        # made and copied in turn: the only (m, (1 + r) m) array kept (C_NN W and
+        # C_NT W Fric are formed when a reduced matrix is, :meth:`friction_matrix`)
         self.H = np.empty((m, (1 + r) * m))
         self.C_NN, self.C_NT = self.H[:, :m], self.H[:, m:]
         self.C_NN[...] = C_NN
@@ -178,8 +178,6 @@ class CondensedNewton:
             width = block.shape[1]
             self.C_NT[:, j * width : (j + 1) * width] = block
         del C_NT
-        HW = np.multiply(self.H, np.concatenate([w, system.tile_rows(w)])[None, :])
-        self.A_norm, self.T_fric = HW[:, :m], HW[:, m:]
         self._x = np.zeros((1 + r) * m)  # work arrays of the iteration, and views of parts
         self._x_n, self._x_t = self._x[:m], self._x[m:]
         self._x_rows = self._x_t.reshape(r, m)
@@ -262,15 +260,23 @@ class CondensedNewton:
             "the rounding of N u into residuals"
         )
 
+    def norm_columns(self, cols: NDArray) -> NDArray:
+        """Columns ``cols`` of ``C_NN W`` (an index or boolean array over the nodes)."""
+        return self.C_NN[:, cols] * self.system.weights[cols][None, :]
+
     def friction_matrix(self, fric: NDArray) -> NDArray:
         """``C_NN W + C_NT W Fric`` (m, m): how the pressure friction acts on moves the
-        normal displacements (the friction rows of a node summed)."""
-        if self.system.rows == 1:
-            return self.A_norm + self.T_fric * fric[None, :]
-        m = self.system.m
-        TF = self.T_fric * fric[None, :]
-        out = self.A_norm + TF[:, :m]
-        for k in range(1, self.system.rows):
+        normal displacements (the friction rows of a node summed), formed in place."""
+        s = self.system
+        m = s.m
+        TF = np.multiply(self.C_NT, s.tile_rows(s.weights)[None, :])  # C_NT W
+        TF *= fric[None, :]
+        if s.rows == 1:
+            out = TF
+            out += np.multiply(self.C_NN, s.weights[None, :])  # C_NN W
+            return out
+        out = np.multiply(self.C_NN, s.weights[None, :])
+        for k in range(s.rows):
             out += TF[:, k * m : (k + 1) * m]
         return out
 
@@ -279,9 +285,10 @@ class CondensedNewton:
         friction: the kept ones while they stay the same."""
         red = self._reduced
         if red is None or not red.matches(active, dp, fric):
+            self._reduced = red = None  # its factors are not kept while new ones are made
             red = self._reduced = _ReducedMatrix(
                 self.friction_matrix(fric),
-                self.A_norm,
+                self.norm_columns(active),
                 active,
                 dp,
                 fric,
