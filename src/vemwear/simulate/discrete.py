@@ -394,13 +394,15 @@ class Discretization:
         """``w^{n+1}`` from the wear and the pressures of level ``n = level`` (3.22):
         :func:`~vemwear.simulate.wear.wear_update` with ``alpha(t_n)`` and
         :meth:`wear_pressure`."""
-        t = self.problem.time.t
+        t = self._times
         return wear_update(
-            w,
-            t[level + 1] - t[level],
-            self.alpha(float(t[level])),
-            self.wear_pressure(p_soft, p_rigid),
+            w, t[level + 1] - t[level], self.alpha(t[level]), self.wear_pressure(p_soft, p_rigid)
         )
+
+    @functools.cached_property
+    def _times(self) -> list[float]:
+        """The time levels as Python floats (read at every level; the same doubles)."""
+        return cast(list[float], self.problem.time.t.tolist())
 
     @property
     def force_parts(self) -> tuple[tuple[str, str], ...]:

@@ -378,8 +378,7 @@ def kkt_residuals_block(
     # the penetrations level by level, (k, m): the law acts on each contiguous row as
     # kkt_residuals applies it (or on all at once when it is elementwise)
     R = np.empty((k, m))
-    for j, st in enumerate(steps):
-        np.subtract(NX[:, j], st.w, out=R[j])
+    np.subtract(NX.T, np.array([st.w for st in steps]), out=R)
     P_soft = _by_level(system.p, R, system.p.elementwise)
     fric = np.column_stack([st.fric for st in steps])
     w = system.weights[:, None]
