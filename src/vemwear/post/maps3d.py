@@ -166,8 +166,16 @@ def line_profile(
     """
     tri, _ = _triangulation(result)
     y = float(0.5 * (tri.y.min() + tri.y.max())) if at is None else float(at)
+    return _profile(tri, _values(result, name)[row], y, samples)
+
+
+def _profile(
+    tri: Triangulation, values: NDArray[np.float64], y: float, samples: int = 201
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`line_profile` on a given triangulation (its point locator, built on the
+    first call, serves every later one)."""
     s = np.linspace(float(tri.x.min()), float(tri.x.max()), samples)
-    f = LinearTriInterpolator(tri, _values(result, name)[row])
+    f = LinearTriInterpolator(tri, values)
     return s, np.ma.filled(f(s, np.full_like(s, y)).astype(float), np.nan)
 
 
@@ -206,8 +214,9 @@ def plot_contact_line(
     fig = Figure(figsize=(5.0 * len(quantities), 4.0), dpi=DPI)
     axes = np.atleast_1d(fig.subplots(1, len(quantities)))
     for ax, name in zip(axes, quantities, strict=True):
+        V = _values(result, name)
         for c, r in zip(colors, rows, strict=True):
-            s, v = line_profile(result, name, r, at=y)
+            s, v = _profile(tri, V[r], y)
             ax.plot(s, v, color=c, lw=1.6, label=rf"$t$ = {float(result.t[r]):.3g}")
         ax.set_xlabel(f"${_AXES[a]}$ (on ${_AXES[b]}$ = {y:.3g})")
         ax.set_ylabel(_with_gap(result, MAP_QUANTITIES[name]))
