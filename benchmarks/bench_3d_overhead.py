@@ -8,7 +8,9 @@ phases around them (``config``: the modules, reading the file, the mesh and its 
 the problem; ``plan``: estimates, output directory, the report; ``outputs``: reading the
 levels back, ``result.npz``, summary, figures, ParaView files, of which ``figures`` and
 ``paraview`` where the summary names them) and the rest of the process (``process -
-run``: the interpreter, the command line, the first imports).
+run``: the interpreter, the command line, the first imports). ``cpu`` is the CPU time
+(user + system, all threads) of the process: unlike the wall times it hardly grows when
+other work shares the cores.
 Every case runs with the outputs of the example (figures and ParaView files) and with
 both off (``--outputs off``, ``[output] figures = false, vtk = false``: result.h5,
 result.npz and summary.json only). Repeats are interleaved (every case once, then
@@ -34,6 +36,7 @@ import argparse
 import json
 import os
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -81,17 +84,18 @@ def run_case(family: str, outputs: bool, tmp: Path, src: str | None = None) -> d
     cfg.write_text(config_text(family, outputs), encoding="utf-8")
     out = tmp / f"out-{family}-{outputs}{tag}"
     cmd = [sys.executable, "-m", "vemwear", "run", str(cfg), "-o", str(out)]
-    t = time.perf_counter()
+    t, cpu = time.perf_counter(), _children_cpu()
     proc = subprocess.run(
         [*cmd, "--no-progress", "--force"], capture_output=True, text=True, env=env
     )
-    wall = time.perf_counter() - t
+    wall, cpu = time.perf_counter() - t, _children_cpu() - cpu
     if proc.returncode != 0:
         raise SystemExit(f"{family} failed:\n{proc.stderr.strip()[-2000:]}")
     tm = json.loads((out / "summary.json").read_text())["timings"]
     floor = sum(tm[k] for k in SETUP_AND_LEVELS)
     return {
         "process": wall,
+        "cpu": cpu,
         "floor": floor,
         "config": tm["config"],
         "plan": tm["plan"],
@@ -101,6 +105,12 @@ def run_case(family: str, outputs: bool, tmp: Path, src: str | None = None) -> d
         "rest": wall - tm["run"],
         "ratio": wall / floor,
     }
+
+
+def _children_cpu() -> float:
+    """CPU seconds (user + system) of the finished children so far."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 
 
 def _mmm(v: list[float]) -> str:
@@ -132,8 +142,8 @@ def main(argv: list[str] | None = None) -> int:
             for f, n, o in runs:
                 runs[(f, n, o)].append(run_case(f, o, Path(d), srcs[n]))
     print(f"vemwear run of example_3d.toml per family; min / median / max of {a.repeat} runs [s]")
-    cols = ("process", "floor", "config", "plan", "outputs", "figures", "paraview", "rest")
-    head = " | ".join(f"{c:^20}" for c in ("process", "set-up + levels", *cols[2:]))
+    cols = ("process", "cpu", "floor", "config", "plan", "outputs", "figures", "paraview", "rest")
+    head = " | ".join(f"{c:^20}" for c in ("process", "cpu", "set-up + levels", *cols[3:]))
     w = max(len(f) for f in a.families) + (max(len(n) for n in srcs) + 1 if a.src else 0)
     print(f"{'family':<{w}} {'outputs':<7} | {head} | ratio")
     for (f, n, o), rs in runs.items():
