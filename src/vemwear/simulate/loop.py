@@ -310,8 +310,7 @@ class MemorySink:
         out.wear[r], out.u_nu[r] = w, solution.u_nu
         out.p_rigid[r], out.p_soft[r] = solution.p_rigid, solution.p_soft
         out.iterations[r] = solution.iterations
-        res = solution.residuals
-        out.residuals[r] = tuple(map(res.__getitem__, RESIDUAL_NAMES))
+        out.residuals[r] = [solution.residuals[k] for k in RESIDUAL_NAMES]
         if solution.forces is not None and out.forces is not None:
             out.forces[r] = solution.forces
 

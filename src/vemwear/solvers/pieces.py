@@ -207,7 +207,6 @@ class PiecePredictor:
             if j:
                 w_next = advance(S[j - 1])
                 if w_next is None:  # the step data change beyond the wear
-                    Y, P, S, Wr, A = Y[:j], P[:j], S[:j], Wr[:j], A[:j]
                     count = j
                     break
                 w = w_next
@@ -225,9 +224,9 @@ class PiecePredictor:
             # before it without the levels after it (a piece change at the run's start
             # cost a whole run of levels)
             if not -(float((g - Y[j]).min()) * inv_g) <= limit_tol:
-                Y, P, S, Wr, A = Y[:j], P[:j], S[:j], Wr[:j], A[:j]
                 count, cut = j, True
                 break
+        Y, P, S, Wr, A = Y[:count], P[:count], S[:count], Wr[:count], A[:count]
         P_plus = np.maximum(P, 0.0)  # Newton's solution clamps p_rigid after its test
         if count:
             ok = self._same_piece(Y, P_plus, Wr, piece)
