@@ -455,3 +455,40 @@ def test_a_soft_layer_much_stiffer_than_the_body_is_named_when_newton_fails():
     solver = d.step_solver(SolverOptions("newton"))
     step = d.step_data(0, np.zeros(d.system.m))
     assert solver.stiffness_note(solver.solve(step, None, recover=False).u_nu, step) == ""
+
+
+def test_a_run_keeps_the_blocks_of_k_it_uses_and_not_the_whole_matrix(monkeypatch):
+    """The stiffness on all dofs is not kept by a discretization (in 3D it is as large
+    as the free block); asked for, it is assembled again, and the blocks the run uses
+    are its blocks. The absolute row sums of the certificates are those of ``|K|``,
+    bit for bit, taken in chunks of rows without a copy of K; the condensed Newton's
+    dense blocks are views of one array, ``C_NN W`` and ``C_NT W Fric`` formed from
+    them when asked for."""
+    import scipy.sparse as sp
+
+    import vemwear.solvers.system as system_module
+
+    pr = paper_problem(divisions=(16, 8), steps=2)
+    d = pr.discrete
+    assert "K_full" not in vars(d)
+    K_full = d.K_full
+    free, fixed = d.free, d.constraints.dofs
+    assert abs(K_full[free][:, free] - d.system.K).max() == 0.0
+    assert abs(K_full[free][:, fixed] - d._K_fc).max() == 0.0
+    assert d.K_full is K_full  # kept once asked for
+    monkeypatch.setattr(system_module, "_ROW_CHUNK", 37)  # chunk ends inside rows' runs
+    K = sp.csr_matrix(d.system.K)
+    K = sp.vstack([K[:6], sp.csr_matrix((1, K.shape[1])), K[7:]], format="csr")  # empty row
+    K.data[K.indptr[3] : K.indptr[4]] = 0.0  # stored zeros
+    s = dataclasses.replace(d.system, K=K)
+    assert np.array_equal(s.K_row_sums, np.asarray(abs(K).sum(axis=1)).ravel())
+    newton = d.step_solver(SolverOptions("newton"))
+    for block in (newton.C_NN, newton.C_NT):
+        assert np.shares_memory(block, newton.H)
+    w = d.system.weights
+    active = np.arange(d.system.m) % 3 == 0
+    assert np.array_equal(newton.norm_columns(active), (newton.C_NN * w[None, :])[:, active])
+    fric = np.linspace(0.1, 0.3, d.system.m)
+    assert np.array_equal(
+        newton.friction_matrix(fric), newton.C_NN * w[None, :] + newton.C_NT * w * fric
+    )

@@ -97,6 +97,10 @@ def test_summary_timings_add_up_to_the_wall_time(tmp_path: Path) -> None:
     assert 0.5 * wall <= sum(tm[k] for k in PHASES) <= 1.05 * wall
     assert sum(tm[k] for k in PHASES) <= tm["run"] <= wall
     assert tm["total"] == pytest.approx(tm["assembly"] + tm["setup"] + tm["time_loop"])
+    # the outputs' parts: reading the levels back, result.npz + summary, figures, ParaView
+    parts = [tm[f"outputs_{k}"] for k in ("read", "data", "figures", "vtk")]
+    assert all(v > 0.0 for v in parts)
+    assert 0.9 * tm["outputs"] <= sum(parts) <= tm["outputs"]
 
 
 def test_a_reused_factorization_is_not_reported_again() -> None:

@@ -51,7 +51,7 @@ def _quoteattr(text: str) -> str:
 if TYPE_CHECKING:
     import meshio
 
-__all__ = ["from_meshio3d", "mesh_file_dim", "read_mesh3d", "write_mesh3d"]
+__all__ = ["VTUWriter3D", "from_meshio3d", "mesh_file_dim", "read_mesh3d", "write_mesh3d"]
 
 #: Outward local faces of the linear volume cells (VTK / meshio vertex order).
 LOCAL_FACES: dict[str, tuple[tuple[int, ...], ...]] = {
@@ -131,45 +131,75 @@ def write_mesh3d(
     MeshError
         For another suffix than ``.vtu`` or data of the wrong length.
     """
-    path = Path(path)
-    if path.suffix.lower() != ".vtu":
-        raise MeshError(f"{path}: polyhedral meshes are written as .vtu files only")
-    nv = np.diff(mesh.cell_vertex_offsets)
-    order = np.argsort(nv, kind="stable")
-    faces, faceoffsets = _vtk_faces(mesh, order)
-    conn_off, conn = take_loops(mesh.cell_vertex_offsets, mesh.cell_vertex_ids, order)
-    bf = mesh.boundary_faces
-    boff, bv = take_loops(mesh.face_offsets, mesh.face_vertices, bf)
-    field = {name: np.array([i + 1, 2]) for i, name in enumerate(mesh.part_names)}
-    field.update(zip(_KEYS, (boff, bv, np.asarray(mesh.boundary_tags, np.int64)), strict=True))
-    pd = {k: np.asarray(v) for k, v in (point_data or {}).items()}
-    cd = {"cell_id": order.astype(np.int64)}
-    for k, v in (cell_data or {}).items():
-        cd[k] = np.asarray(v)[order]
-    for what, data, n in (("point", pd, mesh.n_points), ("cell", cd, mesh.n_cells)):
-        for k, v in data.items():
-            if len(v) != n:
-                raise MeshError(f"{path}: {what} data {k!r} has {len(v)} rows, expected {n}")
-    parts = [
-        '<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="0.1" '
-        'byte_order="LittleEndian">\n<UnstructuredGrid>\n<FieldData>\n',
-        *(_array(k, v, f' NumberOfTuples="{len(v)}"') for k, v in field.items()),
-        f'</FieldData>\n<Piece NumberOfPoints="{mesh.n_points}" '
-        f'NumberOfCells="{mesh.n_cells}">\n<Points>\n',
-        _array("Points", mesh.points),
-        "</Points>\n<Cells>\n",
-        _array("connectivity", conn),
-        _array("offsets", conn_off[1:]),
-        _array("types", np.full(mesh.n_cells, 42, dtype=np.uint8)),
-        _array("faces", faces),
-        _array("faceoffsets", faceoffsets),
-        "</Cells>\n<PointData>\n",
-        *(_array(k, v) for k, v in pd.items()),
-        "</PointData>\n<CellData>\n",
-        *(_array(k, v) for k, v in cd.items()),
-        "</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n",
-    ]
-    path.write_text("".join(parts))
+    VTUWriter3D(mesh)(path, point_data, cell_data)
+
+
+class VTUWriter3D:
+    """:func:`write_mesh3d` for one mesh and many fields (the levels of a series): the
+    mesh's part of the file (points, polyhedra, boundary parts) is encoded once.
+
+    Parameters
+    ----------
+    mesh : Mesh3D
+    """
+
+    def __init__(self, mesh: Mesh3D) -> None:
+        self.mesh = mesh
+        nv = np.diff(mesh.cell_vertex_offsets)
+        self.order = order = np.argsort(nv, kind="stable")
+        faces, faceoffsets = _vtk_faces(mesh, order)
+        conn_off, conn = take_loops(mesh.cell_vertex_offsets, mesh.cell_vertex_ids, order)
+        bf = mesh.boundary_faces
+        boff, bv = take_loops(mesh.face_offsets, mesh.face_vertices, bf)
+        field = {name: np.array([i + 1, 2]) for i, name in enumerate(mesh.part_names)}
+        tags = np.asarray(mesh.boundary_tags, np.int64)
+        field.update(zip(_KEYS, (boff, bv, tags), strict=True))
+        self.head = "".join(
+            [
+                '<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="0.1" '
+                'byte_order="LittleEndian">\n<UnstructuredGrid>\n<FieldData>\n',
+                *(_array(k, v, f' NumberOfTuples="{len(v)}"') for k, v in field.items()),
+                f'</FieldData>\n<Piece NumberOfPoints="{mesh.n_points}" '
+                f'NumberOfCells="{mesh.n_cells}">\n<Points>\n',
+                _array("Points", mesh.points),
+                "</Points>\n<Cells>\n",
+                _array("connectivity", conn),
+                _array("offsets", conn_off[1:]),
+                _array("types", np.full(mesh.n_cells, 42, dtype=np.uint8)),
+                _array("faces", faces),
+                _array("faceoffsets", faceoffsets),
+                "</Cells>\n",
+            ]
+        )
+        self.cell_id = _array("cell_id", order.astype(np.int64))
+
+    def __call__(
+        self,
+        path: str | os.PathLike[str],
+        point_data: Mapping[str, ArrayLike] | None = None,
+        cell_data: Mapping[str, ArrayLike] | None = None,
+    ) -> None:
+        """Write the mesh with these fields to the ``.vtu`` file ``path``."""
+        mesh, path = self.mesh, Path(path)
+        if path.suffix.lower() != ".vtu":
+            raise MeshError(f"{path}: polyhedral meshes are written as .vtu files only")
+        pd = {k: np.asarray(v) for k, v in (point_data or {}).items()}
+        cd = {k: np.asarray(v) for k, v in (cell_data or {}).items()}
+        for what, data, n in (("point", pd, mesh.n_points), ("cell", cd, mesh.n_cells)):
+            for k, v in data.items():
+                if len(v) != n:
+                    raise MeshError(f"{path}: {what} data {k!r} has {len(v)} rows, expected {n}")
+        own = cd.pop("cell_id", None)  # by default the cells' ids in the file's order
+        parts = [
+            self.head,
+            "<PointData>\n",
+            *(_array(k, v) for k, v in pd.items()),
+            "</PointData>\n<CellData>\n",
+            self.cell_id if own is None else _array("cell_id", own[self.order]),
+            *(_array(k, v[self.order]) for k, v in cd.items()),
+            "</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n",
+        ]
+        path.write_text("".join(parts))
 
 
 def _polyhedra(data: list[list[NDArray]], first: int) -> tuple[NDArray, NDArray, NDArray]:

@@ -89,6 +89,7 @@ def force_table(result: Result) -> list[dict[str, Any]]:
 def plot_forces(result: Result, path: str | os.PathLike[str] | None = None) -> Figure:
     """Force resultants against time: per contact part the normal and tangential force of
     its layer, per clamped or prescribed part the two components of its reaction."""
+    from .layout import place_grid
     from .plots import DPI
 
     d = result.problem.dim
@@ -97,7 +98,7 @@ def plot_forces(result: Result, path: str | os.PathLike[str] | None = None) -> F
     normals = part_directions(result)
     from matplotlib.figure import Figure  # here: the table of forces needs no matplotlib
 
-    fig = Figure(figsize=(10.0, 4.0), layout="constrained")
+    fig = Figure(figsize=(10.0, 4.0), dpi=DPI)
     ax_c, ax_r = fig.subplots(1, 2)
     for j, (name, kind) in enumerate(result.force_parts):
         if kind == "contact":
@@ -115,14 +116,16 @@ def plot_forces(result: Result, path: str | os.PathLike[str] | None = None) -> F
             ax_r.plot(t, F[:, j, 1], lw=1.6, ls="--", label=f"{name}: $R_y$")
             if d == 3:
                 ax_r.plot(t, F[:, j, 2], lw=1.6, ls=":", label=f"{name}: $R_z$")
-    ax_c.set_title("contact parts: force of the layer on the body")
-    ax_r.set_title("clamped and prescribed parts: reactions")
+    # titles at a fixed height: no search for tick labels above the panels
+    ax_c.set_title("contact parts: force of the layer on the body", y=1.0)
+    ax_r.set_title("clamped and prescribed parts: reactions", y=1.0)
     for ax in (ax_c, ax_r):
         ax.set_xlabel(r"time $t$")
         ax.set_ylabel("force per unit depth" if d == 2 else "force")
         ax.grid(True, lw=0.4, alpha=0.5)
         if ax.lines:
             ax.legend(loc="best", frameon=False, fontsize=8)
+    place_grid(fig, [[ax_c, ax_r]], (4.2, 3.1))
     if path is not None:
         fig.savefig(path, dpi=DPI)
     return fig

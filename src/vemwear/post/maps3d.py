@@ -21,7 +21,8 @@ from matplotlib.figure import Figure
 from matplotlib.tri import LinearTriInterpolator, Triangulation
 from numpy.typing import NDArray
 
-from .plots import _finish, _params, _time_colors, _with_gap
+from .layout import place_grid
+from .plots import DPI, _finish, _params, _time_colors, _with_gap
 
 if TYPE_CHECKING:
     from ..simulate.loop import Result
@@ -104,8 +105,13 @@ def plot_contact_maps(
     nq, nt = len(quantities), len(rows)
     xy = np.column_stack([tri.x, tri.y])
     aspect = float(np.ptp(xy[:, 1]) / max(np.ptp(xy[:, 0]), 1e-300))
-    fig = Figure(figsize=(3.2 * nt + 1.2, (3.2 * aspect + 0.9) * nq + 0.6), layout="constrained")
-    axes = np.atleast_2d(fig.subplots(nq, nt, squeeze=False))
+    # panels 3.2 inches wide at the face's aspect; a tall face is narrower
+    pw = min(3.2, 4.8 / max(aspect, 1e-300))
+    panel = (pw, float(np.clip(pw * aspect, 0.5, 4.8)))
+    fig = Figure(figsize=(3.2 * nt + 1.2, (panel[1] + 0.9) * nq + 0.6), dpi=DPI)
+    # one scale per row and shared coordinates: tick labels on the outer panels only
+    axes = np.atleast_2d(fig.subplots(nq, nt, squeeze=False, sharex=True, sharey=True))
+    caxes = [fig.add_axes((0.0, 0.0, 0.1, 0.1), label="<colorbar>") for _ in range(nq)]
     for i, name in enumerate(quantities):
         V = _values(result, name)[rows]
         lo, hi = float(V.min()), float(V.max())
@@ -117,12 +123,15 @@ def plot_contact_maps(
             ax = axes[i, j]
             im = ax.tricontourf(tri, V[j], levels=levels, cmap="viridis", extend="neither")
             ax.set_aspect("equal")
-            ax.set_title(rf"$t$ = {float(result.t[r]):.3g}", fontsize=9)
-            ax.set_xlabel(f"${_AXES[a]}$")
+            # a title at a fixed height: no search for tick labels above the panel
+            ax.set_title(rf"$t$ = {float(result.t[r]):.3g}", fontsize=9, y=1.0)
+            if i == nq - 1:
+                ax.set_xlabel(f"${_AXES[a]}$")
             if j == 0:
                 ax.set_ylabel(f"${_AXES[b]}$")
-        fig.colorbar(im, ax=list(axes[i]), label=_with_gap(result, MAP_QUANTITIES[name]))
-    fig.suptitle(f"Contact face: {_params(result)}", fontsize=10)
+        fig.colorbar(im, cax=caxes[i], label=_with_gap(result, MAP_QUANTITIES[name]))
+    title = fig.suptitle(f"Contact face: {_params(result)}", fontsize=10)
+    place_grid(fig, axes.tolist(), panel, colorbars=caxes, suptitle=title)
     return _finish(fig, path)
 
 
@@ -157,8 +166,16 @@ def line_profile(
     """
     tri, _ = _triangulation(result)
     y = float(0.5 * (tri.y.min() + tri.y.max())) if at is None else float(at)
+    return _profile(tri, _values(result, name)[row], y, samples)
+
+
+def _profile(
+    tri: Triangulation, values: NDArray[np.float64], y: float, samples: int = 201
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`line_profile` on a given triangulation (its point locator, built on the
+    first call, serves every later one)."""
     s = np.linspace(float(tri.x.min()), float(tri.x.max()), samples)
-    f = LinearTriInterpolator(tri, _values(result, name)[row])
+    f = LinearTriInterpolator(tri, values)
     return s, np.ma.filled(f(s, np.full_like(s, y)).astype(float), np.nan)
 
 
@@ -194,15 +211,17 @@ def plot_contact_line(
     y = float(0.5 * (tri.y.min() + tri.y.max())) if at is None else float(at)
     rows = _rows(result, times)
     colors = _time_colors(len(rows))
-    fig = Figure(figsize=(5.0 * len(quantities), 4.0), layout="constrained")
+    fig = Figure(figsize=(5.0 * len(quantities), 4.0), dpi=DPI)
     axes = np.atleast_1d(fig.subplots(1, len(quantities)))
     for ax, name in zip(axes, quantities, strict=True):
+        V = _values(result, name)
         for c, r in zip(colors, rows, strict=True):
-            s, v = line_profile(result, name, r, at=y)
+            s, v = _profile(tri, V[r], y)
             ax.plot(s, v, color=c, lw=1.6, label=rf"$t$ = {float(result.t[r]):.3g}")
         ax.set_xlabel(f"${_AXES[a]}$ (on ${_AXES[b]}$ = {y:.3g})")
         ax.set_ylabel(_with_gap(result, MAP_QUANTITIES[name]))
         ax.grid(True, lw=0.4, alpha=0.5)
         ax.legend(frameon=False, fontsize=8)
-    fig.suptitle(f"Along the contact face: {_params(result)}", fontsize=10)
+    title = fig.suptitle(f"Along the contact face: {_params(result)}", fontsize=10)
+    place_grid(fig, [list(axes)], (4.1, 3.0), suptitle=title)
     return _finish(fig, path)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -41,6 +42,7 @@ def write_outputs(
     paraview: str = "xdmf",
     extra: dict[str, Any] | None = None,
     between: Callable[[], None] | None = None,
+    timings: dict[str, float] | None = None,
 ) -> dict[str, list[str]]:
     """Write the standard output of one run into an existing directory.
 
@@ -71,6 +73,9 @@ def write_outputs(
         Stored under ``inputs.extra`` in ``summary.json``.
     between : callable, optional
         Called after each file (a safe point where a caller's stop request is raised).
+    timings : dict, optional
+        Receives the seconds of the parts: ``outputs_data`` (``result.npz`` and
+        ``summary.json``), ``outputs_figures`` and ``outputs_vtk``.
 
     Returns
     -------
@@ -82,11 +87,15 @@ def write_outputs(
     step = between or (lambda: None)
     out = Path(outdir)
     written: dict[str, list[str]] = {"data": [], "figures": [], "vtk": []}
+    parts = timings if timings is not None else {}
+    tick = time.perf_counter()
     post.save_result(result, out, extra=extra)
+    parts["outputs_data"] = time.perf_counter() - tick
     written["data"] += ["result.npz", "summary.json"]
     step()
     if result.problem.dim == 3:
-        return _outputs3d(result, out, written, times, figures, vtk)
+        return _outputs3d(result, out, written, times, figures, vtk, parts)
+    tick = time.perf_counter()
     if figures:
         from .forces import plot_forces
 
@@ -103,6 +112,7 @@ def write_outputs(
             draw()
             step()
         written["figures"] += list(FIGURE_NAMES.values())
+    parts["outputs_figures"], tick = time.perf_counter() - tick, time.perf_counter()
     if vtk and paraview == "xdmf":
         from .xdmf import write_xdmf_series
 
@@ -111,6 +121,7 @@ def write_outputs(
     elif vtk:
         pvd = post.write_vtk_series(result, out)
         written["vtk"] += [os.path.relpath(pvd, out), pvd.stem]
+    parts["outputs_vtk"] = time.perf_counter() - tick
     return written
 
 
@@ -121,8 +132,10 @@ def _outputs3d(
     times: Sequence[float],
     figures: bool,
     vtk: bool,
+    parts: dict[str, float],
 ) -> dict[str, list[str]]:
     """The figures and the ParaView series of a 3D run."""
+    tick = time.perf_counter()
     if figures:
         _use_agg()
         from .. import post
@@ -135,11 +148,13 @@ def _outputs3d(
         post.plot_time_history(result, out / FIGURE_NAMES_3D["time_history"])
         plot_forces(result, out / FIGURE_NAMES_3D["forces"])
         written["figures"] += list(FIGURE_NAMES_3D.values())
+    parts["outputs_figures"], tick = time.perf_counter() - tick, time.perf_counter()
     if vtk:
         from .vtk3d import write_vtk_series3d
 
         pvd = write_vtk_series3d(result, out)
         written["vtk"] += [os.path.relpath(pvd, out), pvd.stem]
+    parts["outputs_vtk"] = time.perf_counter() - tick
     return written
 
 

@@ -22,6 +22,8 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 from numpy.typing import NDArray
 
+from .layout import place_grid
+
 if TYPE_CHECKING:
     from ..simulate.loop import Result
 
@@ -425,7 +427,7 @@ def plot_time_history(
         nodes; right axis: iterations per level (bars).
     """
     t = np.asarray(result.t)
-    fig = Figure(figsize=(7.5, 4.2), layout="constrained")
+    fig = Figure(figsize=(7.5, 4.2), dpi=DPI)
     ax = fig.subplots()
     ax2 = ax.twinx()
     it = np.asarray(result.iterations)
@@ -462,6 +464,8 @@ def plot_time_history(
     ax.set_ylim(bottom=0)
     h1, l1 = ax.get_legend_handles_labels()
     h2, l2 = ax2.get_legend_handles_labels()
-    fig.legend(h1 + h2, l1 + l2, loc="outside lower center", ncols=4, frameon=False)
-    ax.set_title(f"Time history: {_params(result)}")
+    legend = fig.legend(h1 + h2, l1 + l2, loc="lower center", ncols=4, frameon=False)
+    # a title at a fixed height: no search for tick labels above the panel
+    ax.set_title(f"Time history: {_params(result)}", y=1.0)
+    place_grid(fig, [[(ax, ax2)]], (6.2, 2.9), legend=legend)
     return _finish(fig, path)

@@ -3,10 +3,11 @@
 meshio's XDMF writer has no general polyhedra (and XDMF's own ``Polyhedron`` topology is
 not read by every ParaView reader), so a 3D run is always written as
 ``<name>.pvd`` + ``<name>/<name>_NNNN.vtu``, one VTU file per stored level, through
-:func:`vemwear.mesh.io3d.write_mesh3d` (VTK polyhedron cells, faces listed outward; the
-boundary parts as field data). Point data: ``displacement`` (3 components), ``wear``,
-``u_nu``, ``penetration``, ``p_rigid``, ``p_soft``, ``contact`` (1 on the contact nodes; the
-contact quantities are 0 elsewhere); cell data: ``strain`` and ``stress`` (3x3 tensors of
+:class:`vemwear.mesh.io3d.VTUWriter3D` (the mesh encoded once for all levels; VTK
+polyhedron cells, faces listed outward; the boundary parts as field data). Point
+data: ``displacement`` (3 components), ``wear``, ``u_nu``, ``penetration``, ``p_rigid``,
+``p_soft``, ``contact`` (1 on the contact nodes; the contact quantities are 0
+elsewhere); cell data: ``strain`` and ``stress`` (3x3 tensors of
 the projection ``Pi u``, ``sigma = 2 eta eps + lam tr(eps) I``), ``von_mises`` and
 ``cell_id``.
 """
@@ -21,7 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ..mesh.io3d import write_mesh3d
+from ..mesh.io3d import VTUWriter3D
 from ..util.atomic import atomic_file
 from ..vem.local import strain_stress
 from .pointdata import contact_point_data
@@ -77,11 +78,11 @@ def write_vtk_series3d(
     Path
         The ``.pvd`` file.
     """
-    mesh = result.problem.mesh
+    write = VTUWriter3D(result.problem.mesh)  # type: ignore[arg-type]
 
     def write_level(lv: int, path: Path) -> None:
         point_data, cell_data = level_fields3d(result, lv)
         with atomic_file(path) as tmp:
-            write_mesh3d(mesh, tmp, point_data, cell_data)  # type: ignore[arg-type]
+            write(tmp, point_data, cell_data)
 
     return write_series(result, outdir, levels, name, write_level)

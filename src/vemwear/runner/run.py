@@ -472,6 +472,7 @@ def _finish(plan: RunPlan, timings: dict[str, float], start: float | None) -> Re
         extra["resumed_from_level"] = int(plan.state.completed)
         extra["previous_solver"] = plan.previous_solver
     result = result_from_stream(cfg.problem, out / STREAM_NAME, solver=plan.meta["solver"])
+    parts = {"outputs_read": time.perf_counter() - tick}
     result.timings.update(timings)
     written = write_outputs(
         result,
@@ -481,11 +482,13 @@ def _finish(plan: RunPlan, timings: dict[str, float], start: float | None) -> Re
         vtk=cfg.output.vtk,
         extra=extra,
         between=check_stop,  # safe points between the files
+        timings=parts,
         **({"paraview": cfg.output.paraview} if hasattr(cfg.output, "paraview") else {}),
     )
     now = time.perf_counter()
     # the outputs: reading the levels back, result.npz, summary, figures, ParaView files
-    _add_timings(out, result, {"outputs": now - tick, **({"run": now - start} if start else {})})
+    more = {"outputs": now - tick, **parts, **({"run": now - start} if start else {})}
+    _add_timings(out, result, more)
     files = [STREAM_NAME, *(f.split("/")[0] for names in written.values() for f in names)]
     write_marker(out, "complete", sorted(set(files)), command="run")
     for name in (CHECKPOINT_NAME, PARTIAL_NAME):  # after the marker: see completed_leftovers

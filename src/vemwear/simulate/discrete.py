@@ -98,23 +98,23 @@ class Discretization:
         self.constraints = con = problem.constraints
         self.free = con.free
         self.space = space = problem.space
-        with np.errstate(all="ignore"):
-            self.K_full = space.stiffness(problem.material, problem.stabilization)
-            if con.ties is not None:  # Q^T K Q: the rigid parts' ties (docs/method.md 1d)
-                self.K_full = con.ties.tie(self.K_full)
-        if not np.all(np.isfinite(self.K_full.data)):
+        K_full = self._stiffness()
+        if not np.all(np.isfinite(K_full.data)):
             mat = problem.material
             raise DataError(
                 f"[material] lam = {mat.lam:g}, eta = {mat.eta:g} give a stiffness matrix with "
                 "non-finite entries (an overflow); use values of a sensible scale"
             )
-        K_rows = self.K_full[self.free]  # the rows of the free dofs, sliced once
+        K_rows = K_full[self.free]  # the rows of the free dofs, sliced once
         K = K_rows[:, self.free].tocsr()
         # the coupling of the free and the constrained dofs: the lifting of prescribed
-        # values, K_fc u_c(t) (none if all are zero), and the reactions
+        # values, K_fc u_c(t) (none if all are zero), and the reactions, K_cc u_c(t)
         self._K_fc = K_rows[:, con.dofs].tocsr()
         self.K_fc = None if con.zero else self._K_fc
-        del K_rows
+        self._K_cc = sp.csr_matrix((0, 0)) if con.zero else K_full[con.dofs][:, con.dofs].tocsr()
+        # the whole matrix is not kept: a run solves with these blocks (in 3D it is as
+        # large as the free block, a tenth of the factors); :attr:`K_full` makes it again
+        del K_rows, K_full
         trace = None
         #: the dimension d: dof i of the vertex values is component i % d
         self.dim = dim = int(space.dim)
@@ -171,13 +171,25 @@ class Discretization:
         self._resultants: _Resultants | None = None
         self._sliding_at: _Sliding | None = None
         self._sliding_prev: _Sliding | None = None
-        self._K_cc = sp.csr_matrix((0, 0))
         #: wall seconds of the phases done on this discretization and not yet reported
         #: by a run: ``assembly`` (this constructor), ``setup`` (a step solver's
         #: factorization), ``smallness`` (:meth:`smallness_estimate`); the first run
         #: reports them (:meth:`take_timings`), also when a diagnostic asked for them
         #: before it, and a later run that reuses them spends none
         self.timings: dict[str, float] = {"assembly": time.perf_counter() - tick}
+
+    def _stiffness(self) -> sp.csr_matrix:
+        """The stiffness on all dofs, with the rigid parts' ties (docs/method.md 1d)."""
+        con = self.constraints
+        with np.errstate(all="ignore"):
+            K = self.space.stiffness(self.problem.material, self.problem.stabilization)
+            return K if con.ties is None else con.ties.tie(K)  # Q^T K Q
+
+    @functools.cached_property
+    def K_full(self) -> sp.csr_matrix:
+        """The stiffness on all dofs (free and constrained), assembled again when asked:
+        a run keeps only the blocks it uses (``system.K``, ``K_fc``, ``K_cc``)."""
+        return self._stiffness()
 
     def take_timings(self) -> dict[str, float]:
         """The phases of :attr:`timings` spent since the last call (then forgotten)."""
@@ -386,13 +398,15 @@ class Discretization:
         """``w^{n+1}`` from the wear and the pressures of level ``n = level`` (3.22):
         :func:`~vemwear.simulate.wear.wear_update` with ``alpha(t_n)`` and
         :meth:`wear_pressure`."""
-        t = self.problem.time.t
+        t = self._times
         return wear_update(
-            w,
-            t[level + 1] - t[level],
-            self.alpha(float(t[level])),
-            self.wear_pressure(p_soft, p_rigid),
+            w, t[level + 1] - t[level], self.alpha(t[level]), self.wear_pressure(p_soft, p_rigid)
         )
+
+    @functools.cached_property
+    def _times(self) -> list[float]:
+        """The time levels as Python floats (read at every level; the same doubles)."""
+        return cast(list[float], self.problem.time.t.tolist())
 
     @property
     def force_parts(self) -> tuple[tuple[str, str], ...]:
@@ -500,8 +514,6 @@ class Discretization:
 
                 Z = spla.splu(s.K.tocsc()).solve(B)
             ZT = np.ascontiguousarray(np.asarray(Z).reshape(len(self.free), -1).T)
-            if not con.zero:
-                self._K_cc = self.K_full[con.dofs][:, con.dofs].tocsr()
             A_r = -np.hstack([np.asarray(s.N @ ZT.T).T, np.asarray(s.Tau @ ZT.T).T])
             # the layer forces on constrained components (usually none: told by the
             # operators' column indices without slicing)

@@ -279,6 +279,7 @@ class MemorySink:
         d = problem.discrete
         K, m, nv = len(plan.levels), d.system.m, problem.mesh.n_points
         self.row, self.slot = plan.slots()
+        self._rows = self.row.tolist()  # Python ints: read at every level
         # the result's arrays are written once and handed back: 4 KB pages fault steadily
         self.result = Result(
             problem=problem,
@@ -303,7 +304,7 @@ class MemorySink:
         )
 
     def level(self, n: int, w: NDArray[np.float64], solution: StepSolution) -> None:
-        r, out = self.row[n], self.result
+        r, out = self._rows[n], self.result
         if r < 0:
             return
         out.wear[r], out.u_nu[r] = w, solution.u_nu

@@ -68,15 +68,15 @@ class _ReducedMatrix:
     friction where slopes are nonzero) and kept while those stay the same.
     """
 
-    def __init__(self, A_fric, A_norm, active, dp, fric, total=None) -> None:
+    def __init__(self, A_fric, norm_active, active, dp, fric, total=None) -> None:
         self.active = active
         self.dp = dp
         # the friction enters only through the columns with a nonzero slope, and with
         # friction on the whole pressure through the active columns of those nodes
         on_rigid = total is not None and bool(np.any(active & total))
         self.fric = fric if np.any(dp[~active]) or on_rigid else None
-        Mat = A_fric * dp[None, :]
-        Mat[:, active] = A_norm[:, active]
+        Mat = np.multiply(A_fric, dp[None, :], order="F")  # LAPACK's order: no copy
+        Mat[:, active] = norm_active  # the active columns of C_NN W
         if on_rigid:  # d R / d p_rigid = C_NN W + C_NT W Fric at those nodes
             Mat[:, active & total] = A_fric[:, active & total]
         inactive = np.flatnonzero(~active)
@@ -146,9 +146,8 @@ class CondensedNewton:
                 )
             Nc = system.N[:, cols].toarray()
             CN = self.factor.S_inv @ Nc.T
-            self.C_NN = Nc @ CN
-            self.C_NT = system.Tau[:, cols].toarray() @ CN
-            self.C_NT = np.ascontiguousarray(self.C_NT.T)  # N C Tau^T, (m, r m)
+            C_NN = Nc @ CN
+            C_NT = [(system.Tau[:, cols].toarray() @ CN).T]  # N C Tau^T, (m, r m)
         else:
             free = cd >= 0  # prescribed components of contact nodes are not unknowns
             if self.rigid is None:
@@ -163,19 +162,22 @@ class CondensedNewton:
                 full[np.ix_(free, free)] = self.factor.S_inv
                 C = full.reshape(m, k, m, k)
             nu, tau = system.normals, system.tangents
-            self.C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
-            if system.rows == 1:
-                self.C_NT = np.einsum("ai,aibj,bj->ab", nu, C, tau)
-            else:  # one block per friction row, from the same block C of K^{-1}
-                self.C_NT = np.hstack(
-                    [np.einsum("ai,aibj,bj->ab", nu, C, t) for t in tau.reshape(-1, m, k)]
-                )
+            C_NN = np.einsum("ai,aibj,bj->ab", nu, C, nu)
+            # one block per friction row, from the same block C of K^{-1}
+            C_NT = [np.einsum("ai,aibj,bj->ab", nu, C, t) for t in tau.reshape(-1, m, k)]
         w = system.weights
         r = system.rows
-        self.A_norm = self.C_NN * w[None, :]
-        # C_NT W: the friction term is T_fric Fric
-        self.T_fric = self.C_NT * system.tile_rows(w)[None, :]
-        self.H = np.hstack([self.C_NN, self.C_NT])  # one product per iteration
+        # H = [C_NN, C_NT], one product per iteration, holds the blocks (views of it),
+        # made and copied in turn: the only (m, (1 + r) m) array kept (C_NN W and
+        # C_NT W Fric are formed when a reduced matrix is, :meth:`friction_matrix`)
+        self.H = np.empty((m, (1 + r) * m))
+        self.C_NN, self.C_NT = self.H[:, :m], self.H[:, m:]
+        self.C_NN[...] = C_NN
+        del C_NN
+        for j, block in enumerate(C_NT):
+            width = block.shape[1]
+            self.C_NT[:, j * width : (j + 1) * width] = block
+        del C_NT
         self._x = np.zeros((1 + r) * m)  # work arrays of the iteration, and views of parts
         self._x_n, self._x_t = self._x[:m], self._x[m:]
         self._x_rows = self._x_t.reshape(r, m)
@@ -258,15 +260,23 @@ class CondensedNewton:
             "the rounding of N u into residuals"
         )
 
+    def norm_columns(self, cols: NDArray) -> NDArray:
+        """Columns ``cols`` of ``C_NN W`` (an index or boolean array over the nodes)."""
+        return self.C_NN[:, cols] * self.system.weights[cols][None, :]
+
     def friction_matrix(self, fric: NDArray) -> NDArray:
         """``C_NN W + C_NT W Fric`` (m, m): how the pressure friction acts on moves the
-        normal displacements (the friction rows of a node summed)."""
-        if self.system.rows == 1:
-            return self.A_norm + self.T_fric * fric[None, :]
-        m = self.system.m
-        TF = self.T_fric * fric[None, :]
-        out = self.A_norm + TF[:, :m]
-        for k in range(1, self.system.rows):
+        normal displacements (the friction rows of a node summed), formed in place."""
+        s = self.system
+        m = s.m
+        TF = np.multiply(self.C_NT, s.tile_rows(s.weights)[None, :])  # C_NT W
+        TF *= fric[None, :]
+        if s.rows == 1:
+            out = TF
+            out += np.multiply(self.C_NN, s.weights[None, :])  # C_NN W
+            return out
+        out = np.multiply(self.C_NN, s.weights[None, :])
+        for k in range(s.rows):
             out += TF[:, k * m : (k + 1) * m]
         return out
 
@@ -275,9 +285,10 @@ class CondensedNewton:
         friction: the kept ones while they stay the same."""
         red = self._reduced
         if red is None or not red.matches(active, dp, fric):
+            self._reduced = red = None  # its factors are not kept while new ones are made
             red = self._reduced = _ReducedMatrix(
                 self.friction_matrix(fric),
-                self.A_norm,
+                self.norm_columns(active),
                 active,
                 dp,
                 fric,

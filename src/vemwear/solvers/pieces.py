@@ -201,11 +201,12 @@ class PiecePredictor:
             return []  # nothing holds the body on this piece, or no load: Newton says
         Y, P, S, Wr = (np.empty((count, m)) for _ in range(4))
         A = np.empty((count, 0 if rig is None else rig.R.shape[1]))
+        inv_g, limit_tol = newton.inv_g_ref, 0.1 * newton.options.tol
+        cut = False  # whether a level failed the exit test's feasibility
         for j in range(count):
             if j:
                 w_next = advance(S[j - 1])
                 if w_next is None:  # the step data change beyond the wear
-                    Y, P, S, Wr, A = Y[:j], P[:j], S[:j], Wr[:j], A[:j]
                     count = j
                     break
                 w = w_next
@@ -218,12 +219,23 @@ class PiecePredictor:
                 Y[j] = z
                 P[j] = 0.0
             S[j] = law(Y[j] - w)
+            # the feasibility of Newton's exit test at this level (the number of
+            # _errors, bitwise): a level beyond the bound fails the test, so the run ends
+            # before it without the levels after it (a piece change at the run's start
+            # cost a whole run of levels)
+            if not -(float((g - Y[j]).min()) * inv_g) <= limit_tol:
+                count, cut = j, True
+                break
+        Y, P, S, Wr, A = Y[:count], P[:count], S[:count], Wr[:count], A[:count]
         P_plus = np.maximum(P, 0.0)  # Newton's solution clamps p_rigid after its test
-        ok = self._same_piece(Y, P_plus, Wr, piece)
-        errors = self._errors(d, fric, Y, P, S, first, A, piece)
-        ok &= np.all(errors <= 0.1 * newton.options.tol, axis=1)
+        if count:
+            ok = self._same_piece(Y, P_plus, Wr, piece)
+            errors = self._errors(d, fric, Y, P, S, first, A, piece)
+            ok &= np.all(errors <= limit_tol, axis=1)
+        else:
+            ok, errors = np.ones(0, dtype=bool), np.empty((0, 3))
         k = count if ok.all() else int(np.argmin(ok))
-        self._run = min(2 * count, self.width) if k == count else FIRST_RUN
+        self._run = min(2 * count, self.width) if k == count and not cut else FIRST_RUN
         F, n = step.F, step.level
         res = errors[:k].tolist()
         return [

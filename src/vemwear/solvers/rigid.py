@@ -165,7 +165,7 @@ class RigidModes:
         B = np.zeros((m + r, m + r))
         Mat = B[:m, :m]
         Mat[...] = A_fric * dp[None, :]
-        Mat[:, active] = solver.A_norm[:, active]
+        Mat[:, active] = solver.norm_columns(active)
         Mat[:, on_total] = A_fric[:, on_total]
         Mat[inactive, inactive] += 1.0
         B[:m, m:] = -self.NR

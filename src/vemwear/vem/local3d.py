@@ -404,11 +404,15 @@ class Projection3D:
     ----------
     mesh : Mesh3D
     rule : {"enhanced", "fan"}
+    geometry : CellGeometry, optional
+        ``cell_geometry(mesh, rule)``, if already computed.
     """
 
-    def __init__(self, mesh: Mesh3D, rule: str = "enhanced") -> None:
+    def __init__(
+        self, mesh: Mesh3D, rule: str = "enhanced", geometry: CellGeometry | None = None
+    ) -> None:
         self.mesh = mesh
-        cg = cell_geometry(mesh, rule)
+        cg = cell_geometry(mesh, rule) if geometry is None else geometry
         self.xbar, self.volume = cg.xbar, cg.volume
         rows, cols, vals = [], [], []
         for n, (ids, slots) in cg.groups().items():

@@ -151,7 +151,7 @@ class P1Space3D:
 
     @cached_property
     def _projection(self) -> Projection3D:
-        return Projection3D(self.mesh, self.rule)
+        return Projection3D(self.mesh, self.rule, geometry=self.cells)
 
     # ------------------------------------------------------------------ trace (contact)
     def _outward(self, faces: NDArray[np.int64]) -> NDArray[np.float64]:
