@@ -43,19 +43,27 @@ HOLDER: dict[str, Any] = {  # a rigid holder on top: K is Q^T K Q (docs/method.m
 }
 
 
-def _system(case: str, tmp_path: Any) -> Any:
+def _discrete(case: str, tmp_path: Any) -> Any:
     if case.startswith("holder"):
         d = copy.deepcopy(HOLDER)
         d["vem"] = {"order": int(case[-1])}
-        return parse_config(d, source="c.toml").problem.discrete.system
+        return parse_config(d, source="c.toml").problem.discrete
     text = {
         "2d k=1": small_config("p", divisions=(12, 6), steps=2),
         "2d k=2": small_config("p", divisions=(12, 6), steps=2, vem={"order": 2}),
         "3d": CONFIG_3D,
+        # more cells than a batch of the element matrices (512, 256)
+        "2d k=1 large": small_config("p", divisions=(80, 40), steps=2),
+        "2d k=2 large": small_config("p", divisions=(48, 24), steps=2, vem={"order": 2}),
+        "3d large": CONFIG_3D.replace("divisions = [4, 2, 2]", "divisions = [16, 8, 8]"),
     }[case]
     cfg = tmp_path / "c.toml"
     cfg.write_text(text)
-    return load_config(cfg).problem.discrete.system
+    return load_config(cfg).problem.discrete
+
+
+def _system(case: str, tmp_path: Any) -> Any:
+    return _discrete(case, tmp_path).system
 
 
 @pytest.mark.parametrize("case", ["2d k=1", "2d k=2", "3d", "holder k=1", "holder k=2"])
@@ -139,3 +147,37 @@ def test_an_unknown_partitioner_is_refused() -> None:
     mesh = rectangle_squares((2.0, 1.0), (4, 2))
     with pytest.raises(ValueError, match="unknown partitioner 'chaco'"):
         partition_cells(mesh.cell_offsets, mesh.cell_vertices, mesh.points, 2, "chaco")
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        *("2d k=1", "2d k=2", "3d", "holder k=1", "holder k=2"),
+        *("2d k=1 large", "2d k=2 large", "3d large"),
+    ],
+)
+def test_the_cells_around_the_contact_and_constrained_dofs_give_their_rows_bitwise(
+    tmp_path: Any, case: str
+) -> None:
+    """Rank 0 of an MPI run assembles only the cells that touch the contact and the
+    constrained dofs (:meth:`CellAssembly.around`): the rows and columns of the tied
+    stiffness there are those of the whole matrix, bit for bit, and the cells are few."""
+    d = _discrete(case, tmp_path)
+    s, asm = d.system, d.system.assembly
+    full = d.K_full
+    free, fixed = d.free, d.constraints.dofs
+    contact = free[s.contact_cols]
+    near = np.union1d(contact, fixed)
+    A = asm.around(near)
+    assert np.array_equal(A[near].toarray(), full[near].toarray())
+    assert np.array_equal(A[:, near].toarray(), full[:, near].toarray())
+    # and the blocks the run reads: K's rows at the contact dofs, K_fc, K_cc
+    assert np.array_equal(A[contact][:, free].toarray(), s.K[s.contact_cols].toarray())
+    assert np.array_equal(A[free][:, fixed].toarray(), d._K_fc.toarray())
+    assert np.array_equal(A.diagonal()[contact], s.K.diagonal()[s.contact_cols])
+    # the cells are those along Gamma_C and the constrained parts, not the whole mesh
+    cells = asm.touching(near)
+    assert 0 < len(cells) < asm.n_cells
+    # a row elsewhere is not the whole K's (cells left out)
+    inner = np.setdiff1d(np.arange(full.shape[0]), near)
+    assert abs(A[inner] - full[inner]).max() > 0

@@ -331,6 +331,120 @@ def test_each_rank_assembles_the_cells_of_its_part(
     assert got["S_inv"] < RTOL and got["solve"] < RTOL, got
 
 
+OPERATOR_CHECK = """\
+import json, sys
+import numpy as np
+from vemwear.config.build import load_config
+from vemwear.solvers.backends.petsc import serve, session
+
+with session() as root:
+    if not root:
+        serve()
+    else:
+        d = load_config(sys.argv[1]).problem.discretize(distributed=True)
+        s = d.system
+        ref = load_config(sys.argv[1]).problem.discrete  # the serial one, whole K
+        r = ref.system
+        X = np.random.default_rng(2).normal(size=(r.K.shape[0], 3))
+        scale = r.K_norm * np.abs(X).max()
+        cols = r.contact_cols
+        print(json.dumps({
+            "operator": type(s.K).__name__,
+            "row_sums": float(np.abs(s.K_row_sums - r.K_row_sums).max() / r.K_norm),
+            "row_sums_bitwise": bool(np.array_equal(s.K_row_sums, r.K_row_sums)),
+            "row_sums_contact_bitwise": bool(
+                np.array_equal(s.K_row_sums[cols], r.K_row_sums[cols])
+            ),
+            "diagonal": float(np.abs(s.K.diagonal() - r.K.diagonal()).max() / r.K_norm),
+            "c_ncp_bitwise": bool(np.array_equal(s.c_ncp, r.c_ncp)),
+            "rows_bitwise": bool(
+                np.array_equal(s.K.rows(cols).toarray(), r.K[cols].toarray())
+            ),
+            "K_fc_bitwise": bool(np.array_equal(d._K_fc.toarray(), ref._K_fc.toarray())),
+            "block": float(np.abs(s.K @ X - r.K @ X).max() / scale),
+            "vector": float(np.abs(s.K @ X[:, 0] - r.K @ X[:, 0]).max() / scale),
+        }))
+"""
+
+
+@pytest.mark.parametrize(
+    ("case", "ranks"), [("2d", 1), ("2d", 2), ("2d", 4), ("2d k=2", 2), ("3d", 1), ("3d", 4)]
+)
+def test_the_stiffness_kept_by_the_ranks_reads_as_the_serial_one(
+    tmp_path: Path, case: str, ranks: int
+) -> None:
+    """K kept by the ranks, as rank 0's operator: its rows at the contact dofs, K_fc, the
+    diagonal at the contact dofs (the complementarity scale) are bitwise the serial
+    ones; its absolute row sums (the KKT residuals' scales), summed by the ranks on
+    their rows, are bitwise on one rank and at the contact dofs, within 1e-14 of
+    |K| elsewhere (an interface row adds the parts of two ranks); its products with a
+    vector and a block agree to 1e-14 of |K| |x|."""
+    _need_mpi()
+    text = {
+        "2d": CONFIG_2D,
+        "2d k=2": small_config("mpi k=2", divisions=(16, 8), steps=2, vem={"order": 2}),
+        "3d": CONFIG_3D,
+    }[case]
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(text)
+    script = tmp_path / "check.py"
+    script.write_text(OPERATOR_CHECK)
+    done = _run(_mpirun(ranks, sys.executable, str(script), str(cfg)))
+    assert done.returncode == 0, done.stdout + done.stderr
+    got = json.loads(done.stdout.strip().splitlines()[-1])
+    assert got["operator"] == "PetscStiffness"
+    for bitwise in ("row_sums_contact_bitwise", "c_ncp_bitwise", "rows_bitwise", "K_fc_bitwise"):
+        assert got[bitwise], (bitwise, got)
+    if ranks == 1:
+        assert got["row_sums_bitwise"], got
+    assert got["row_sums"] <= 1e-14 and got["diagonal"] <= 1e-14, got
+    assert got["block"] <= 1e-14 and got["vector"] <= 1e-14, got
+
+
+HELD_CHECK = """\
+import json, sys
+import scipy.sparse as sp
+from vemwear import run_config
+from vemwear.config.build import load_config
+
+outcome = run_config(sys.argv[1], sys.argv[2], backend="petsc", progress=False)
+if outcome.rank == 0:
+    d = outcome.config.problem.discrete
+    s = d.system
+    held = {}
+    for name, obj in (("discrete", d), ("system", s), ("K", s.K)):
+        for key, value in vars(obj).items():
+            if sp.issparse(value):
+                held[f"{name}.{key}"] = int(value.nnz)
+    print(json.dumps({
+        "operator": type(s.K).__name__,
+        "K_full": "K_full" in vars(d),
+        "held": held,
+        "rows_at": [int(x) for x in s.K._at],
+        "contact_cols": [int(x) for x in s.contact_cols],
+        "K_nnz": int(load_config(sys.argv[1]).problem.discrete.system.K.nnz),
+    }))
+"""
+
+
+def test_rank_0_of_an_mpi_run_holds_no_whole_stiffness(tmp_path: Path) -> None:
+    """An MPI run (two ranks, 64 x 32 squares): rank 0's discretization holds K as the
+    ranks' operator, whose rows on rank 0 are those of the contact dofs alone; no
+    sparse matrix it holds has a tenth of K's entries."""
+    _need_mpi()
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(small_config("mpi held", divisions=(64, 32), steps=2))
+    script = tmp_path / "held.py"
+    script.write_text(HELD_CHECK)
+    done = _run(_mpirun(2, sys.executable, str(script), str(cfg), str(tmp_path / "out")))
+    assert done.returncode == 0, done.stdout + done.stderr
+    got = json.loads(done.stdout.strip().splitlines()[-1])
+    assert got["operator"] == "PetscStiffness" and not got["K_full"]
+    assert got["rows_at"] == got["contact_cols"]
+    assert "K._rows" in got["held"] and "discrete._K_fc" in got["held"]
+    assert max(got["held"].values()) < 0.1 * got["K_nnz"], got
+
+
 def test_other_commands_under_mpirun_are_refused(tmp_path: Path) -> None:
     if MPIRUN is None:
         pytest.skip("no mpirun: the MPI tests need Open MPI (docs/mpi.md)")

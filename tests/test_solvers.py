@@ -466,7 +466,7 @@ def test_a_run_keeps_the_blocks_of_k_it_uses_and_not_the_whole_matrix(monkeypatc
     them when asked for."""
     import scipy.sparse as sp
 
-    import vemwear.solvers.system as system_module
+    import vemwear.solvers.stiffness as stiffness_module
 
     pr = paper_problem(divisions=(16, 8), steps=2)
     d = pr.discrete
@@ -476,7 +476,7 @@ def test_a_run_keeps_the_blocks_of_k_it_uses_and_not_the_whole_matrix(monkeypatc
     assert abs(K_full[free][:, free] - d.system.K).max() == 0.0
     assert abs(K_full[free][:, fixed] - d._K_fc).max() == 0.0
     assert d.K_full is K_full  # kept once asked for
-    monkeypatch.setattr(system_module, "_ROW_CHUNK", 37)  # chunk ends inside rows' runs
+    monkeypatch.setattr(stiffness_module, "ROW_CHUNK", 37)  # chunk ends inside rows' runs
     K = sp.csr_matrix(d.system.K)
     K = sp.vstack([K[:6], sp.csr_matrix((1, K.shape[1])), K[7:]], format="csr")  # empty row
     K.data[K.indptr[3] : K.indptr[4]] = 0.0  # stored zeros

@@ -310,6 +310,10 @@ def _run_config(
         check_stop()
         if plan.note:
             caution(plan.note)
+        if plan.solver.backend == "petsc" and cfg.adapt is None:
+            # K kept by the ranks, not on rank 0 (docs/mpi.md); an adaptive run reuses
+            # factorizations by a digest of the whole K, and holds it
+            cfg.problem.discretize(distributed=True)
         _, small = smallness_report(cfg.problem, plan.solver)
         for w in [small, *overshoot_lines(cfg)]:
             if w:

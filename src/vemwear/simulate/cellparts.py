@@ -6,6 +6,10 @@ in the global numbering of the free dofs, with the same constraint mapping as
 :class:`~vemwear.simulate.discrete.Discretization` (the rigid parts' ties ``Q^T K Q``,
 then the free rows and columns): both are linear in the cells' matrices, so the parts
 add up to ``K``.
+
+Rank 0 of such a run holds only the rows of K at the contact and the constrained dofs
+(:meth:`CellAssembly.around`): the sum of the matrices of the cells that touch them,
+whose rows there are complete and summed in the same order as those of the whole K.
 """
 
 from __future__ import annotations
@@ -57,10 +61,7 @@ class CellAssembly:
         partition.partition_cells` (``"auto"``: METIS when pymetis imports, else slabs).
         """
         mesh = self.space.mesh
-        if hasattr(mesh, "cell_vertex_ids"):  # 3D: the distinct vertices of each cell
-            offsets, vertices = mesh.cell_vertex_offsets, mesh.cell_vertex_ids
-        else:
-            offsets, vertices = mesh.cell_offsets, mesh.cell_vertices
+        offsets, vertices = self._cell_vertices()
         if method != "rows":
             return partition_cells(offsets, vertices, mesh.points, parts, method)
         n, d = len(self.free), int(self.space.dim)
@@ -72,6 +73,53 @@ class CellAssembly:
         part = np.empty(len(order), dtype=np.int64)
         part[order] = np.arange(len(order)) * parts // max(len(order), 1)
         return part, "rows"
+
+    def _cell_vertices(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """The cells' vertices in CSR form (3D: the distinct vertices of each cell)."""
+        mesh = self.space.mesh
+        if hasattr(mesh, "cell_vertex_ids"):
+            return mesh.cell_vertex_offsets, mesh.cell_vertex_ids
+        return mesh.cell_offsets, mesh.cell_vertices
+
+    def touching(self, dofs: NDArray[np.int64]) -> NDArray[np.int64]:
+        """The cells (increasing ids) whose matrices may have entries in the rows of
+        ``dofs`` (all dofs, before the ties): those with a vertex of the dofs' nodes
+        (k = 2: a vertex of an edge node's edge; a cell node's own cell), a superset of
+        the cells that touch them, which is all a complete row needs."""
+        space, mesh = self.space, self.space.mesh
+        d, n_points = int(space.dim), len(mesh.points)
+        dofs = np.asarray(dofs, dtype=np.int64)
+        marked = np.zeros(n_points, dtype=bool)
+        hit = np.zeros(self.n_cells, dtype=bool)
+        if int(space.order) == 1:
+            marked[dofs // d] = True
+        else:  # k = 2 (:func:`vemwear.vem.dofs2.numbering2`): vertex, edge, cell nodes
+            node = dofs // 2
+            edges = np.asarray(mesh.edges)
+            marked[node[node < n_points]] = True
+            on_edge = node[(node >= n_points) & (node < n_points + len(edges))] - n_points
+            marked[edges[on_edge].ravel()] = True
+            hit[node[node >= n_points + len(edges)] - n_points - len(edges)] = True
+        offsets, vertices = self._cell_vertices()
+        if len(vertices):
+            hit |= np.logical_or.reduceat(marked[vertices], offsets[:-1])
+        return np.flatnonzero(hit)
+
+    def around(self, dofs: NDArray[np.int64]) -> sp.csr_matrix:
+        """The stiffness on all dofs, tied (``Q^T K Q``), of the cells that touch
+        ``dofs`` (all dofs, after the ties) and the dofs tied to them.
+
+        Its rows and columns at ``dofs`` are those of the whole matrix bitwise: every
+        cell that adds to them is in, and each assembly sums a row's entries in cell
+        order (which a subset of the cells keeps), the ties' products row by row.
+        """
+        dofs = np.asarray(dofs, dtype=np.int64)
+        if self.ties is not None:  # the dofs that the ties map onto ``dofs``
+            tied = self.ties.Q[:, dofs].tocoo().row
+            dofs = np.union1d(dofs, tied)
+        with np.errstate(all="ignore"):
+            K = self.space.stiffness(self.material, self.stabilization, self.touching(dofs))
+            return K if self.ties is None else self.ties.tie(K)
 
     def part(self, cells: NDArray[np.int64]) -> sp.csr_matrix:
         """The sum of the ``cells``' matrices on the free dofs, (n, n)."""

@@ -31,6 +31,7 @@ from ..contact import (
 )
 from ..solvers.protocol import StepSolver
 from ..solvers.system import ContactSystem, StepData, StepSolution
+from ..util.arrays import unique as _unique
 from .cellparts import CellAssembly
 from .constraints import describe_motions
 from .wear import wear_rate, wear_update
@@ -87,7 +88,7 @@ class Discretization:
     ``shift`` is zero and the data are the paper's, bitwise).
     """
 
-    def __init__(self, problem: Problem) -> None:
+    def __init__(self, problem: Problem, distributed: bool = False) -> None:
         tick = time.perf_counter()
         mesh = problem.mesh
         self.problem = problem
@@ -98,23 +99,15 @@ class Discretization:
         self.constraints = con = problem.constraints
         self.free = con.free
         self.space = space = problem.space
-        K_full = self._stiffness()
-        if not np.all(np.isfinite(K_full.data)):
-            mat = problem.material
-            raise DataError(
-                f"[material] lam = {mat.lam:g}, eta = {mat.eta:g} give a stiffness matrix with "
-                "non-finite entries (an overflow); use values of a sensible scale"
-            )
-        K_rows = K_full[self.free]  # the rows of the free dofs, sliced once
-        K = K_rows[:, self.free].tocsr()
-        # the coupling of the free and the constrained dofs: the lifting of prescribed
-        # values, K_fc u_c(t) (none if all are zero), and the reactions, K_cc u_c(t)
-        self._K_fc = K_rows[:, con.dofs].tocsr()
-        self.K_fc = None if con.zero else self._K_fc
-        self._K_cc = sp.csr_matrix((0, 0)) if con.zero else K_full[con.dofs][:, con.dofs].tocsr()
-        # the whole matrix is not kept: a run solves with these blocks (in 3D it is as
-        # large as the free block, a tenth of the factors); :attr:`K_full` makes it again
-        del K_rows, K_full
+        assembly = CellAssembly(space, problem.material, problem.stabilization, self.free, con.ties)
+        #: whether K is kept by the ranks of the MPI job (docs/mpi.md): asked for, and
+        #: not under load control, whose anchored K is made from the whole matrix
+        self.distributed = distributed and not len(problem.rigid_basis)
+        K: Any
+        if self.distributed:
+            K = self._distributed_blocks(assembly)
+        else:
+            K = self._blocks()
         trace = None
         #: the dimension d: dof i of the vertex values is component i % d
         self.dim = dim = int(space.dim)
@@ -150,9 +143,7 @@ class Discretization:
             rigid_names=tuple(describe_motions(mesh, basis)) if rigid is not None else (),
             contact_names=tuple(cb.part_names),
             friction_total=np.array(on)[cb.part] if any(on) else None,
-            assembly=CellAssembly(
-                space, problem.material, problem.stabilization, self.free, con.ties
-            ),
+            assembly=assembly,
         )
         wear = [pc.wear_on == "total" for pc in parts]
         #: the nodes whose wear rate takes the whole contact pressure (``wear_on =
@@ -177,6 +168,57 @@ class Discretization:
         #: reports them (:meth:`take_timings`), also when a diagnostic asked for them
         #: before it, and a later run that reuses them spends none
         self.timings: dict[str, float] = {"assembly": time.perf_counter() - tick}
+
+    def _blocks(self) -> sp.csr_matrix:
+        """K on the free dofs; sets the blocks of the constrained dofs (``K_fc``,
+        ``K_cc``) from the whole matrix, which is not kept."""
+        con = self.constraints
+        K_full = self._stiffness()
+        self._check_finite(K_full)
+        K_rows = K_full[self.free]  # the rows of the free dofs, sliced once
+        K = K_rows[:, self.free].tocsr()
+        # the coupling of the free and the constrained dofs: the lifting of prescribed
+        # values, K_fc u_c(t) (none if all are zero), and the reactions, K_cc u_c(t)
+        self._K_fc = K_rows[:, con.dofs].tocsr()
+        self.K_fc = None if con.zero else self._K_fc
+        self._K_cc = sp.csr_matrix((0, 0)) if con.zero else K_full[con.dofs][:, con.dofs].tocsr()
+        # the whole matrix is not kept: a run solves with these blocks (in 3D it is as
+        # large as the free block, a tenth of the factors); :attr:`K_full` makes it again
+        return K
+
+    def _distributed_blocks(self, assembly: CellAssembly) -> Any:
+        """K kept by the MPI ranks (:class:`~vemwear.solvers.backends.petsc_operator.
+        PetscStiffness`); the blocks of the constrained dofs and K's rows at the contact
+        dofs from the cells that touch them alone (their rows and columns there are
+        bitwise those of the whole matrix: :meth:`.cellparts.CellAssembly.around`)."""
+        from ..solvers.backends.petsc_operator import PetscStiffness
+
+        con, cb = self.constraints, self.contact
+        if cb.trace is None:
+            contact = (int(self.space.dim) * cb.nodes[:, None] + np.arange(self.space.dim)).ravel()
+        else:
+            contact = _unique(sp.csr_matrix(cb.trace).indices)
+        near = assembly.around(np.union1d(contact, con.dofs))
+        self._check_finite(near)
+        index = -np.ones(self.n_dof, dtype=np.int64)
+        index[self.free] = np.arange(len(self.free))
+        at = index[contact]
+        at = _unique(at[at >= 0])  # the free contact dofs, increasing
+        near_rows = near[self.free]
+        self._K_fc = near_rows[:, con.dofs].tocsr()
+        self.K_fc = None if con.zero else self._K_fc
+        self._K_cc = sp.csr_matrix((0, 0)) if con.zero else near[con.dofs][:, con.dofs].tocsr()
+        rows = near_rows[at][:, self.free].tocsr()
+        del near, near_rows
+        return PetscStiffness(assembly, at, rows)
+
+    def _check_finite(self, K: sp.csr_matrix) -> None:
+        if not np.all(np.isfinite(K.data)):
+            mat = self.problem.material
+            raise DataError(
+                f"[material] lam = {mat.lam:g}, eta = {mat.eta:g} give a stiffness matrix with "
+                "non-finite entries (an overflow); use values of a sensible scale"
+            )
 
     def _stiffness(self) -> sp.csr_matrix:
         """The stiffness on all dofs, with the rigid parts' ties (docs/method.md 1d)."""
@@ -509,10 +551,15 @@ class Discretization:
                 from ..solvers.rigid import anchored_factor, rigid_modes
 
                 Z = anchored_factor(s, rigid_modes(s, s.contact_cols), "auto").solve(B)
-            else:
+            elif not self.distributed:
                 import scipy.sparse.linalg as spla
 
-                Z = spla.splu(s.K.tocsc()).solve(B)
+                Z = spla.splu(cast(sp.csr_matrix, s.K).tocsc()).solve(B)
+            else:
+                raise ValueError(
+                    "resultants: K is kept by the MPI ranks; give the step solver whose "
+                    "factorization solves with it (the condensed Newton's)"
+                )
             ZT = np.ascontiguousarray(np.asarray(Z).reshape(len(self.free), -1).T)
             A_r = -np.hstack([np.asarray(s.N @ ZT.T).T, np.asarray(s.Tau @ ZT.T).T])
             # the layer forces on constrained components (usually none: told by the
@@ -626,6 +673,11 @@ class Discretization:
             cols = cd[cd >= 0]
         S_inv = getattr(getattr(solver, "factor", None), "S_inv", None)
         if S_inv is None or S_inv.shape != (len(cols), len(cols)):
+            if self.distributed:
+                raise ValueError(
+                    "smallness_estimate: K is kept by the MPI ranks; give the run's step "
+                    "solver (solver=), whose factorization has the block of K^-1 it needs"
+                )
             S_inv = schur_factorize(s.K, cols, s.dof_points).S_inv
         sw = np.sqrt(np.concatenate([s.weights, s.tile_rows(s.weights)]))
         B = sp.vstack([s.N[:, cols], s.Tau[:, cols]]).tocsr()

@@ -321,10 +321,22 @@ class Problem(Generic[MeshT]):
 
     @cached_property
     def discrete(self) -> Discretization:
-        """The assembled discrete problem (built on first use)."""
+        """The assembled discrete problem (built on first use; :meth:`discretize`
+        chooses how)."""
         from .discrete import Discretization
 
         return Discretization(self)
+
+    def discretize(self, distributed: bool = False) -> Discretization:
+        """:attr:`discrete`, built here if it is not yet: with ``distributed``, its K
+        is kept by the ranks of the MPI job of the petsc backend and rank 0 holds only
+        its rows at the contact and the constrained dofs (docs/mpi.md)."""
+        from .discrete import Discretization
+
+        made = self.__dict__.get("discrete")
+        if made is None:
+            made = self.__dict__["discrete"] = Discretization(self, distributed=distributed)
+        return made
 
     def describe(self) -> dict[str, Any]:
         """The inputs as JSON-friendly data (callables by name)."""

@@ -26,13 +26,12 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..contact.law import ComplianceLaw
+from .stiffness import Stiffness, abs_row_sums
 
 #: The scaled KKT residuals every step reports, in this order.
 RESIDUAL_NAMES = ("equilibrium", "feasibility", "complementarity")
 
 _TINY = float(np.finfo(float).tiny)
-#: rows of K whose absolute values are taken at once (:attr:`ContactSystem.K_row_sums`)
-_ROW_CHUNK = 1 << 16
 
 
 class ConvergenceError(RuntimeError):
@@ -49,7 +48,8 @@ class ContactSystem:
 
     Attributes
     ----------
-    K : (nf, nf) sparse stiffness on the free dofs
+    K : (nf, nf) sparse stiffness on the free dofs, or, in an MPI run, an operator
+        (:class:`.stiffness.Stiffness`) whose rows the ranks hold
     contact_dofs : (m, d) free-dof ids of the d components at each contact node
         (-1 for a prescribed component); None when ``trace`` is given
     normals : (m, d) unit nu_a
@@ -80,7 +80,7 @@ class ContactSystem:
         (:class:`vemwear.simulate.cellparts.CellAssembly`); the serial backends use K.
     """
 
-    K: sp.csr_matrix
+    K: sp.csr_matrix | Stiffness
     contact_dofs: NDArray[np.int64] | None
     normals: NDArray[np.float64]
     tangents: NDArray[np.float64]
@@ -196,21 +196,13 @@ class ContactSystem:
 
     @cached_property
     def K_row_sums(self) -> NDArray[np.float64]:
-        """The absolute row sums of K, for backward errors: row by row from the left,
-        as a product of ``|K|`` with ones sums them, without a copy of K (as large as
-        the factors' tenth in 3D) and in chunks of rows."""
+        """The absolute row sums of K, for backward errors (:func:`.stiffness.
+        abs_row_sums`); of a distributed K, summed by the ranks on their rows and
+        gathered (:meth:`.stiffness.Stiffness.row_sums`)."""
+        if isinstance(self.K, Stiffness):
+            return self.K.row_sums()
         K = self.K if isinstance(self.K, sp.csr_matrix) else sp.csr_matrix(self.K)
-        indptr, data = K.indptr, K.data
-        out = np.zeros(K.shape[0])
-        for start in range(0, K.shape[0], _ROW_CHUNK):
-            stop = min(start + _ROW_CHUNK, K.shape[0])
-            lo, hi = indptr[start], indptr[stop]
-            rows = slice(start, stop)
-            filled = indptr[start + 1 : stop + 1] > indptr[rows]  # reduceat: no empty rows
-            if lo < hi:
-                sums = np.add.reduceat(np.abs(data[lo:hi]), indptr[rows][filled] - lo)
-                out[rows][filled] = sums
-        return out
+        return abs_row_sums(K.indptr, K.data, K.shape[0])
 
     @cached_property
     def K_norm(self) -> float:

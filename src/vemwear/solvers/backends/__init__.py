@@ -115,6 +115,13 @@ def factorize(
     ``many_factorizations`` tells ``"auto"`` that the caller factorizes again and again
     (see :func:`resolve_backend`).
     """
+    from ..stiffness import Stiffness
+
+    if isinstance(A, Stiffness):
+        raise ValueError(
+            "the stiffness kept by the MPI ranks (backend 'petsc') makes the Schur "
+            "factorization of the condensed Newton (method 'newton') only"
+        )
     chosen = resolve_backend(backend, A.shape[0], many_factorizations)
     if chosen == "petsc":
         raise ValueError(
@@ -187,7 +194,7 @@ def _digest(K: sp.spmatrix, *arrays: NDArray[Any], backend: str) -> bytes:
 
 
 def schur_factorize(
-    K: sp.spmatrix,
+    K: Any,
     last: NDArray[np.int64],
     points: NDArray[np.float64],
     backend: str = "auto",
@@ -201,7 +208,8 @@ def schur_factorize(
 
     Parameters
     ----------
-    K : (n, n) sparse SPD matrix (the stiffness on the free dofs)
+    K : (n, n) sparse SPD matrix (the stiffness on the free dofs), or (backend petsc)
+        the operator of one kept by the MPI ranks (:mod:`.petsc_operator`)
     last : (c,) dof ids of the Schur block (the contact dofs), in the order wanted
     points : (n, 2) coordinates of each dof's vertex (SuperLU's geometric ordering)
     backend : a name of :data:`BACKENDS`
@@ -210,9 +218,19 @@ def schur_factorize(
         the petsc backend assembles its distributed matrix from the ranks' cells with
         it instead of sending K's rows from rank 0; the other backends factorize K.
     """
+    from ..stiffness import Stiffness
+
     chosen = resolve_backend(backend)
+    # K kept by the MPI ranks (an operator) is factorized where it is, and not kept for
+    # reuse: it is not recognised by a digest of its entries, which rank 0 does not hold
+    kept = _KEEP and not isinstance(K, Stiffness)
+    if isinstance(K, Stiffness) and chosen != "petsc":
+        raise ValueError(
+            "the stiffness kept by the MPI ranks is factorized by the petsc backend, "
+            f"not {chosen!r}"
+        )
     serial = chosen == "pardiso" and backend == "auto" and K.shape[0] < SCHUR_SERIAL_MAX
-    key = _digest(K, last, points, backend=chosen + " serial" * serial) if _KEEP else b""
+    key = _digest(K, last, points, backend=chosen + " serial" * serial) if kept else b""
     if key in _KEPT:
         _KEPT.move_to_end(key)
         return _KEPT[key]
@@ -223,7 +241,7 @@ def schur_factorize(
             factor = _module("petsc").PetscSchur(K, last, points, assembly=assembly)
         else:
             factor = _module("scipy").SuperLUSchur(K, last, points)
-    if _KEEP:
+    if kept:
         _KEPT[key] = factor
         while len(_KEPT) > _KEEP:
             _KEPT.popitem(last=False)

@@ -36,7 +36,7 @@ import os
 import signal
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from functools import cache
 from typing import Any
@@ -231,6 +231,7 @@ class _Local:
         self.rows = int(self.counts[st.rank])
         self.order = order
         self.ksp: Any = None
+        self.A: Any = None  # a matrix kept for products (:mod:`.petsc_operator`)
         self.F: Any = None
         self.b: Any = None
         self.x: Any = None
@@ -246,6 +247,13 @@ class _Local:
 
     def interior(self, R: NDArray[np.float64] | None, k: int) -> NDArray[np.float64] | None:
         """``K_ii^{-1} R_i`` column by column (R on rank 0, (n, k)), gathered on rank 0."""
+        return self.columns(R, k, lambda: self.F.solve(self.b, self.x))
+
+    def columns(
+        self, R: NDArray[np.float64] | None, k: int, apply: Callable[[], None]
+    ) -> NDArray[np.float64] | None:
+        """``apply`` (``b -> x``: a solve, a product) to the columns of R (on rank 0,
+        (n, k)), each scattered to the ranks' rows, the results gathered on rank 0."""
         st, MPI = self.st, self.st.MPI
         X = np.empty((self.n, k), order="F") if st.rank == 0 else None
         col = np.empty(self.n)
@@ -256,7 +264,7 @@ class _Local:
                 col[:] = R[:, j] if self.order is None else R[self.order, j]
             st.comm.Scatterv([col, *split] if st.rank == 0 else None, self.buf, root=0)
             self.b.setArray(self.buf)
-            self.F.solve(self.b, self.x)
+            apply()
             out = self.x.getArray(readonly=True)
             st.comm.Gatherv(out, [col, *split] if st.rank == 0 else None, root=0)
             if X is not None:
@@ -266,31 +274,59 @@ class _Local:
                     X[self.order, j] = col
         return X
 
+    def gather(self, mine: NDArray[np.float64]) -> NDArray[np.float64] | None:
+        """One number per row of this rank, gathered on rank 0 in K's order, (n,)."""
+        st = self.st
+        out = np.empty(self.n) if st.rank == 0 else None
+        split = [self.counts, self.starts[:-1], st.MPI.DOUBLE]
+        st.comm.Gatherv(
+            np.ascontiguousarray(mine), [out, *split] if out is not None else None, root=0
+        )
+        if out is None or self.order is None:
+            return out
+        back = np.empty(self.n)
+        back[self.order] = out
+        return back
+
     def release(self) -> None:
-        for obj in (self.ksp, self.b, self.x):
-            obj.destroy()
+        for obj in (self.ksp, self.A, self.b, self.x):
+            if obj is not None:
+                obj.destroy()
 
 
 def _factorize(
     st: _Rank,
     fid: int,
-    K: sp.csr_matrix | None = None,
+    n: int = 0,
     last: NDArray[np.int64] | None = None,
+    K: sp.csr_matrix | None = None,
+    K_c: sp.csr_matrix | None = None,
     assembly: Any = None,
     partition: str = "rows",
+    matrix: int | None = None,
 ) -> tuple[NDArray[np.float64], list[int], dict[str, Any]] | None:
     """The collective factorization; returns on rank 0 the Schur complement (Fortran
     order, lower triangle valid), the megabytes of MUMPS's factorization on each rank
     and the report of the distributed matrix's making (:func:`.petsc_cells.assemble_by_cells`;
     without ``assembly``, the seconds of the rows' sending and receiving on each rank),
-    None elsewhere."""
+    None elsewhere.
+
+    Rank 0 gives the size ``n``, the Schur dofs ``last`` and the rows ``K_c`` of K at
+    them, and the matrix: the id of a distributed matrix made before (``matrix``,
+    :class:`.petsc_operator.PetscStiffness`), or ``assembly`` (made here from the
+    ranks' cells), or ``K`` (its rows sent from rank 0)."""
     PETSc, comm = st.PETSc, st.comm
     head = None
-    if K is not None and last is not None:
-        head = (K.shape[0], len(last), assembly is not None, partition)
-    n, c, by_cells, partition = comm.bcast(head, root=0)
+    if last is not None:
+        head = (n, len(last), assembly is not None, partition, matrix)
+    n, c, by_cells, partition, matrix = comm.bcast(head, root=0)
     report: dict[str, Any] = {}
-    if by_cells:
+    A: Any = None
+    if matrix is not None:  # the matrix of the operator: made, kept by its owner
+        made = st.factors[matrix]
+        loc = _Local(st, n, made.counts, made.order)
+        A = made.A
+    elif by_cells:
         from .petsc_cells import assemble_by_cells
 
         loc, (indptr, indices, data), report = assemble_by_cells(st, n, assembly, partition)
@@ -298,7 +334,7 @@ def _factorize(
         tick = time.perf_counter()
         loc = _Local(st, n)
         if st.rank == 0:
-            assert K is not None and last is not None
+            assert K is not None
             for r in range(1, st.size):
                 blk = K[loc.starts[r] : loc.starts[r + 1]]
                 comm.send((blk.indptr, blk.indices, blk.data), dest=r, tag=fid)
@@ -308,12 +344,11 @@ def _factorize(
             indptr, indices, data = comm.recv(source=0, tag=fid)
         seconds = comm.gather(time.perf_counter() - tick, root=0)
         report = {"partitioner": "rows", "seconds": seconds} if seconds is not None else {}
+    owned = A is None
+    if owned:
+        A = _matrix(st, loc, (indptr, indices, data))
+        del indptr, indices, data
     it = PETSc.IntType
-    shape = ((loc.rows, n), (loc.rows, n))
-    csr = (indptr.astype(it), indices.astype(it), np.asarray(data, dtype=np.float64))
-    A = PETSc.Mat().createAIJ(size=shape, csr=csr, comm=PETSc.COMM_WORLD)
-    del indptr, indices, data, csr
-    A.setOption(PETSc.Mat.Option.SPD, True)
     ksp = PETSc.KSP().create(PETSc.COMM_WORLD)
     ksp.setOperators(A)
     ksp.setType("preonly")
@@ -337,18 +372,29 @@ def _factorize(
     # MUMPS's INFO(22): the memory (MB) the factorization used on each rank
     megabytes = comm.gather(int(F.getMumpsInfo(22)), root=0)
     loc.x, loc.b = A.createVecs()
-    A.destroy()  # the solver keeps its own reference
+    if owned:
+        A.destroy()  # the solver keeps its own reference
     schur.destroy()
     loc.ksp, loc.F = ksp, F
     st.factors[fid] = loc
     # one product S z by an interior solve tells which triangle of MUMPS's block holds S
     z = np.cos(np.arange(c) + 0.5) if st.rank == 0 else np.zeros(0)
-    K_c = K[last] if K is not None and last is not None else None
     Y = loc.interior(None if K_c is None else (K_c.T @ z)[:, None], 1)
     if st.rank != 0 or K_c is None or Y is None or last is None:
         return None
     Sz = K_c[:, last] @ z - K_c @ Y[:, 0]  # K_cc z - K_ci K_ii^{-1} K_ic z
     return _schur_block(lib, F, c, z, Sz), megabytes, report
+
+
+def _matrix(st: _Rank, loc: _Local, rows: tuple[NDArray, NDArray, NDArray]) -> Any:
+    """The distributed SPD matrix of this rank's CSR ``rows`` (all columns)."""
+    PETSc, it = st.PETSc, st.PETSc.IntType
+    indptr, indices, data = rows
+    shape = ((loc.rows, loc.n), (loc.rows, loc.n))
+    csr = (indptr.astype(it), indices.astype(it), np.asarray(data, dtype=np.float64))
+    A = PETSc.Mat().createAIJ(size=shape, csr=csr, comm=PETSc.COMM_WORLD)
+    A.setOption(PETSc.Mat.Option.SPD, True)
+    return A
 
 
 def _schur_block(
@@ -439,6 +485,14 @@ def _serve(st: _Rank) -> None:
                 _factorize(st, *args)
             elif op == "solve":
                 _solve(st, *args)
+            elif op == "stiffness":
+                from .petsc_operator import _stiffness
+
+                _stiffness(st, *args)
+            elif op == "multiply":
+                from .petsc_operator import _multiply
+
+                _multiply(st, *args)
         except _InStep:  # rank 0 meets it too and reports it
             continue
         except BaseException:  # a rank out of step: end the whole job, not only this rank
@@ -496,7 +550,8 @@ class PetscSchur:
 
     Parameters
     ----------
-    K : (n, n) sparse SPD matrix
+    K : (n, n) sparse SPD matrix, or the operator of one kept by the ranks
+        (:class:`.petsc_operator.PetscStiffness`: its matrix is factorized as it is)
     last : (c,) dof ids of the Schur block, in this order
     points : unused (MUMPS orders the matrix itself); accepted for a common signature
     assembly : optional
@@ -515,7 +570,7 @@ class PetscSchur:
 
     def __init__(
         self,
-        K: sp.spmatrix,
+        K: Any,
         last: NDArray[np.int64],
         points: Any = None,
         assembly: Any = None,
@@ -529,18 +584,24 @@ class PetscSchur:
         if len(_unique(last)) != len(last):
             raise ValueError("Schur dofs: the list of contact dofs has repeated entries")
         tick = time.perf_counter()
-        K = sp.csr_matrix(K, dtype=np.float64)
-        K.sum_duplicates()
-        self.n = K.shape[0]
+        matrix = getattr(K, "matrix_id", None)
+        if matrix is not None:  # K kept by the ranks (.petsc_operator): rank 0 has K_c
+            self.n = K.shape[0]
+            self.K_c = K.rows(last)
+            K = None
+        else:
+            K = sp.csr_matrix(K, dtype=np.float64)
+            K.sum_duplicates()
+            self.n = K.shape[0]
+            self.K_c = K[last]  # (c, n): the rows of the contact dofs
         self.last = last
-        self.K_c = K[last]  # (c, n): the rows of the contact dofs
         self.K_ic = sp.csr_matrix(self.K_c.T)  # K is symmetric: the columns of them
         self.fid = st.next_id
         st.next_id += 1
         self.timings["ordering"] = time.perf_counter() - tick
         tick = time.perf_counter()
         with st.command("factorize", self.fid):
-            made = _factorize(st, self.fid, K, last, assembly, partition)
+            made = _factorize(st, self.fid, self.n, last, K, self.K_c, assembly, partition, matrix)
         self.timings["factorization"] = time.perf_counter() - tick
         tick = time.perf_counter()
         assert made is not None
