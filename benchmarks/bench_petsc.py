@@ -4,20 +4,25 @@ For each case (2D: Example 5.2's data on 2n x n squares; 3D: the 3D example's bl
 2n x n x n hexahedra) and each way of factorizing:
 
 * ``petsc N=1``, ``petsc N=2``, ...: ``mpirun -n N`` runs of this script with the
-  petsc backend (each rank assembles the stiffness of its own cells into the
-  distributed matrix; MUMPS factorizes over the ranks with the Schur complement on the
-  contact dofs);
-* with ``--rows``, also ``petsc rows N=1``, ...: the distributed matrix made as before,
-  rank 0 sending each rank its block of the rows of the K it assembled;
+  petsc backend as a run uses it: the ranks assemble the distributed matrix from their
+  own cells and keep it, rank 0 holds K's operator and assembles only the cells along
+  the contact and the constrained dofs (``Problem.discretize(distributed=True)``);
+  MUMPS factorizes the ranks' matrix with the Schur complement on the contact dofs;
+* with ``--cells``, also ``petsc cells N=1``, ...: rank 0 assembles the whole K as
+  well (the path before the operator: the ranks' cells, and K on rank 0);
+* with ``--rows``, also ``petsc rows N=1``, ...: the distributed matrix made as at
+  first, rank 0 sending each rank its block of the rows of the K it assembled;
 * ``pardiso`` (or ``scipy``): the serial default path, :func:`schur_factorize` with
   ``"auto"``, in one process;
 
-the time of each phase: ``assembly`` (mesh, stiffness, rank 0), ``distribute`` (the
-making of the distributed matrix, the slowest rank: the recipe and the partition sent,
-each rank's cells' matrices, the interface rows exchanged; or the rows sent),
+the time of each phase: ``assembly`` (mesh, stiffness or its rows at the contact and
+the constrained dofs, contact operators: rank 0's own), ``distribute`` (the making of
+the distributed matrix, the slowest rank: the recipe and the partition sent, each
+rank's cells' matrices, the interface rows exchanged; or the rows sent),
 ``factor`` (MUMPS's analysis and factorization; PARDISO's ordering and
-factorization), ``schur inv`` (the inverse of the dense Schur complement on rank 0), and
-the ``solve/rhs`` of a block of ``--rhs`` right-hand sides (the recovery of u). Every
+factorization), ``schur inv`` (the inverse of the dense Schur complement on rank 0),
+``set-up`` (all of them, from the configuration to the inverse), and the
+``solve/rhs`` of a block of ``--rhs`` right-hand sides (the recovery of u). Every
 process is a fresh one; the cases run interleaved (one of each per round) ``--repeat``
 times and are reported as min / median / max. The floor, measured in the same rounds,
 is ``pardiso plain``: a plain PARDISO Cholesky factorization of the same matrix (no
@@ -32,7 +37,7 @@ on that rank (INFO(22)), which is the share that falls with N.
 Usage::
 
     python benchmarks/bench_petsc.py --case 2d:128 3d:24 --ranks 1 2 --repeat 3
-    python benchmarks/bench_petsc.py --case 2d:128 3d:16 --ranks 1 2 --rows --no-serial
+    python benchmarks/bench_petsc.py --case 2d:128 3d:16 --ranks 1 2 --cells --rows --no-serial
     python benchmarks/bench_petsc.py --mpirun "mpirun --allow-run-as-root --oversubscribe"
 
 The script must run with a Python in which petsc4py and mpi4py import (docs/mpi.md).
@@ -53,7 +58,7 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-PHASES = ("assembly", "distribute", "factor", "schur inv", "solve/rhs ms")
+PHASES = ("assembly", "distribute", "factor", "schur inv", "set-up", "solve/rhs ms")
 #: per rank, over the rounds
 PER_RANK = ("cells s", "distribute s", "peak MB")
 
@@ -116,7 +121,9 @@ def _peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def _system(case: str):
+def _system(case: str, distributed: bool = False):
+    """K (a SciPy matrix, or with ``distributed`` the operator of the matrix the ranks
+    keep), the contact dofs, the dof points and the recipe of K."""
     from vemwear.config import load_config
 
     dim, n = case.split(":")
@@ -125,7 +132,7 @@ def _system(case: str):
         path = Path(tmp) / "case.toml"
         path.write_text(text)
         cfg = load_config(path)
-        s = cfg.problem.discrete.system
+        s = cfg.problem.discretize(distributed=distributed).system
         cd = s.contact_dofs.ravel()
         return s.K, cd[cd >= 0], s.dof_points, s.assembly
 
@@ -138,7 +145,7 @@ def worker(case: str, method: str, rhs: int, partition: str = "rows") -> None:
     if method.startswith("petsc"):
         from vemwear.solvers.backends.petsc import PetscSchur, _rank, serve, session
 
-        by_cells = method == "petsc"
+        by_cells = method == "petsc-cells"
         st = _rank()
         with session() as root:
             if root:
@@ -146,6 +153,7 @@ def worker(case: str, method: str, rhs: int, partition: str = "rows") -> None:
                     case,
                     rhs,
                     lambda K, c, p, a: PetscSchur(K, c, p, a if by_cells else None, partition),
+                    distributed=method == "petsc",
                 )
             else:
                 serve()
@@ -172,20 +180,25 @@ def worker(case: str, method: str, rhs: int, partition: str = "rows") -> None:
     print("RESULT " + json.dumps(row), flush=True)
 
 
-def _measure(case: str, rhs: int, make) -> dict:
+def _measure(case: str, rhs: int, make, distributed: bool = False) -> dict:
     import numpy as np
 
     t = time.perf_counter()
-    K, contact, points, assembly = _system(case)
-    row: dict = {"assembly": time.perf_counter() - t, "n": K.shape[0], "c": len(contact)}
+    K, contact, points, assembly = _system(case, distributed)
+    made = time.perf_counter() - t
     t = time.perf_counter()
     f = make(K, contact, points, assembly)
     total = time.perf_counter() - t
-    schur = getattr(f, "timings", {}).get("schur", 0.0)
-    report = getattr(f, "assembly_report", {})
+    # the distributed matrix: made with the discretization (distributed), or by the
+    # factorization (from the cells, or the rows sent by rank 0)
+    report = getattr(K if distributed else f, "assembly_report", {})
+    row: dict = {"n": K.shape[0], "c": len(contact)}
     row["distribute"] = max(report.get("seconds", [0.0]))
-    row["factor"] = total - schur - row["distribute"]
+    row["assembly"] = made - row["distribute"] if distributed else made
+    schur = getattr(f, "timings", {}).get("schur", 0.0)
+    row["factor"] = total - schur - (0.0 if distributed else row["distribute"])
     row["schur inv"] = schur
+    row["set-up"] = made + total
     row["distribute s"] = report.get("seconds", [0.0])
     row["cells s"] = report.get("cell_seconds", [])
     row["cells"] = report.get("cells", [])
@@ -248,7 +261,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rhs", type=int, default=8, help="columns of the block solve")
     ap.add_argument("--mpirun", default="mpirun --allow-run-as-root --oversubscribe")
     ap.add_argument(
-        "--rows", action="store_true", help="also the rows sent by rank 0 (the former path)"
+        "--rows", action="store_true", help="also the rows sent by rank 0 (the first path)"
+    )
+    ap.add_argument(
+        "--cells",
+        action="store_true",
+        help="also the whole K on rank 0 beside the ranks' cells (the second path)",
     )
     ap.add_argument(
         "--no-serial", action="store_true", help="leave out the serial default and its floor"
@@ -271,6 +289,8 @@ def main(argv: list[str] | None = None) -> int:
         runs.update({"default (auto)": [], "pardiso plain": []})
     for n in a.ranks:
         runs[f"petsc N={n}"] = [*shlex.split(a.mpirun), "-n", str(n)]
+        if a.cells:
+            runs[f"petsc cells N={n}"] = runs[f"petsc N={n}"]
         if a.rows:
             runs[f"petsc rows N={n}"] = runs[f"petsc N={n}"]
     times: dict[tuple[str, str], dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
@@ -280,7 +300,8 @@ def main(argv: list[str] | None = None) -> int:
             for name, prefix in runs.items():
                 method = {"default (auto)": "auto"}.get(name, name)
                 if name.startswith("petsc"):
-                    method = "petsc-rows" if "rows" in name else "petsc"
+                    way = name.split()[1]  # "N=2", or the path: "cells", "rows"
+                    method = "petsc" if way.startswith("N=") else f"petsc-{way}"
                 done = subprocess.run(
                     [*prefix, *me, case, method], capture_output=True, text=True, check=False
                 )
