@@ -86,6 +86,10 @@ class Discretization:
     ``shift = gap - offset``: so the penetration is ``u_nu - gap - w`` and the
     constraint ``u_nu - gap <= g`` (with no gap and no prescribed contact component,
     ``shift`` is zero and the data are the paper's, bitwise).
+
+    With ``distributed`` (an MPI run of the petsc backend, docs/mpi.md) K is kept by the
+    ranks and ``system.K`` is rank 0's operator of it; this process assembles only the
+    cells along the contact and the constrained dofs.
     """
 
     def __init__(self, problem: Problem, distributed: bool = False) -> None:

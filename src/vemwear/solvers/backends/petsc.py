@@ -10,7 +10,8 @@ each from the cells of its part of the mesh (:func:`.petsc_cells.assemble_by_cel
 partitions the cells and sends the recipe, :class:`vemwear.simulate.cellparts.
 CellAssembly`; a rank owns the rows of its cells, renumbered in contiguous blocks, and
 the interface rows' entries go to their owner); for a matrix given without a recipe
-(the anchored K of load control) rank 0 sends each rank its block of rows. PETSc
+(the anchored K of load control) rank 0 sends each rank its block of rows; a matrix
+that the ranks keep for the run (:mod:`.petsc_operator`) is factorized as it is. PETSc
 gives the distributed matrix to MUMPS (Cholesky of an SPD matrix) with the contact
 dofs as MUMPS's Schur variables (``MatFactorSetSchurIS``, MUMPS's ICNTL(19)):
 MUMPS factorizes the interior block over all ranks and leaves the dense Schur
