@@ -15,7 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from .petsc import _InStep, _Local, _Rank
+from .petsc_ranks import _InStep, _Local, _Rank
 
 __all__ = ["assemble_by_cells"]
 

@@ -19,7 +19,8 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..stiffness import abs_row_sums
-from .petsc import _Local, _matrix, _Rank, _rank
+from .petsc_cells import assemble_by_cells
+from .petsc_ranks import _Local, _matrix, _Rank, _rank
 
 __all__ = ["PetscStiffness"]
 
@@ -111,8 +112,6 @@ def _stiffness(
     """The collective making of the distributed matrix ``mid``, kept on every rank;
     returns on rank 0 the absolute row sums and the diagonal of K (each rank's rows,
     gathered in K's order) and the report of the assembly, None elsewhere."""
-    from .petsc_cells import assemble_by_cells
-
     n, partition = st.comm.bcast((n, partition) if st.rank == 0 else None, root=0)
     loc, (indptr, indices, data), report = assemble_by_cells(st, n, assembly, partition)
     sums = abs_row_sums(indptr, data, loc.rows)
