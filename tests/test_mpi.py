@@ -445,6 +445,37 @@ def test_rank_0_of_an_mpi_run_holds_no_whole_stiffness(tmp_path: Path) -> None:
     assert max(got["held"].values()) < 0.1 * got["K_nnz"], got
 
 
+CONFIG_LOAD_CONTROL = small_config(  # a pad on rollers, held vertically by contact alone
+    "mpi load control",
+    divisions=(16, 8),
+    steps=6,
+    boundary={
+        "clamped": None,
+        "traction": "top",
+        "displacement": [{"name": "rollers", "on": ["left", "right"], "ux": 0.0}],
+    },
+    loads={"f1": [0.0, 0.0], "f2": [0.0, -0.06]},
+    contact={"mu": 0.0},
+    solver={"backend": None},
+    output={"store_u": "all"},
+)
+
+
+def test_load_control_on_two_ranks_equals_serial(tmp_path: Path) -> None:
+    """Load control keeps the whole K on rank 0 (its anchored matrix is made from it,
+    docs/mpi.md) and its rows are sent to the ranks: the run on two ranks is the
+    serial one."""
+    _need_mpi()
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(CONFIG_LOAD_CONTROL)
+    done = _run(_vemwear(str(cfg), "-o", str(tmp_path / "serial")))
+    assert done.returncode == 0, done.stdout + done.stderr
+    out = tmp_path / "mpi"
+    done = _run(_mpirun(2, *_vemwear(str(cfg), "-o", str(out), "--backend", "petsc")))
+    assert done.returncode == 0, done.stdout + done.stderr
+    _assert_equal_runs(_arrays(tmp_path / "serial"), _arrays(out))
+
+
 def test_other_commands_under_mpirun_are_refused(tmp_path: Path) -> None:
     if MPIRUN is None:
         pytest.skip("no mpirun: the MPI tests need Open MPI (docs/mpi.md)")
