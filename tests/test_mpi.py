@@ -445,6 +445,49 @@ def test_rank_0_of_an_mpi_run_holds_no_whole_stiffness(tmp_path: Path) -> None:
     assert max(got["held"].values()) < 0.1 * got["K_nnz"], got
 
 
+REFUSALS = """\
+import json, sys
+from vemwear.config.build import load_config
+from vemwear.solvers.backends import factorize, schur_factorize
+
+d = load_config(sys.argv[1]).problem.discretize(distributed=True)
+s = d.system
+said = {}
+for name, call in (
+    ("smallness", lambda: d.smallness_estimate()),
+    ("pardiso", lambda: schur_factorize(s.K, s.contact_cols, s.dof_points, "scipy")),
+    ("factorize", lambda: factorize(s.K)),
+    ("rows", lambda: s.K.rows([s.K.shape[0] - 1])),  # a dof at the top
+):
+    try:
+        call()
+        said[name] = None
+    except ValueError as exc:
+        said[name] = str(exc)
+print(json.dumps(said))
+"""
+
+
+def test_what_needs_the_whole_stiffness_is_refused_in_one_line(tmp_path: Path) -> None:
+    """With K kept by the ranks (here one process, no mpirun), what would need the
+    whole matrix on rank 0 is refused with one line naming the way: the smallness
+    estimate without the run's step solver, a factorization by another backend, the
+    rows that rank 0 does not hold."""
+    _need_mpi()
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(CONFIG_2D)
+    script = tmp_path / "refusals.py"
+    script.write_text(REFUSALS)
+    done = _run([sys.executable, str(script), str(cfg)])
+    assert done.returncode == 0, done.stdout + done.stderr
+    said = json.loads(done.stdout.strip().splitlines()[-1])
+    assert "give the run's step solver" in said["smallness"]
+    assert "factorized by the petsc backend, not 'scipy'" in said["pardiso"]
+    assert "condensed Newton (method 'newton') only" in said["factorize"]
+    assert "kept by the MPI ranks, not on rank 0" in said["rows"]
+    assert all("\n" not in line for line in said.values())
+
+
 CONFIG_LOAD_CONTROL = small_config(  # a pad on rollers, held vertically by contact alone
     "mpi load control",
     divisions=(16, 8),
