@@ -122,7 +122,7 @@ def _exit_code(exc: BaseException) -> tuple[int, str]:
             ("vemwear.runner.plan", "PlanError"),
             ("vemwear.runner.entry", "LaunchError"),
             ("vemwear.mesh.polymesh", "MeshError"),
-            ("vemwear.simulate.discrete", "DataError"),
+            ("vemwear.simulate.blocks", "DataError"),
         )
     ):
         return EXIT_INPUT, str(exc)

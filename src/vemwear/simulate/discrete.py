@@ -31,8 +31,7 @@ from ..contact import (
 )
 from ..solvers.protocol import StepSolver
 from ..solvers.system import ContactSystem, StepData, StepSolution
-from ..util.arrays import unique as _unique
-from .cellparts import CellAssembly
+from .blocks import DataError, cell_assembly, stiffness_blocks, whole_stiffness
 from .constraints import describe_motions
 from .wear import wear_rate, wear_update
 
@@ -45,10 +44,6 @@ __all__ = ["DataError", "Discretization"]
 #: Tangential foundation velocities within this multiple of the largest ``|v*|`` of the
 #: time grid are zero (64 units in the last place: round-off of the data's expressions).
 VELOCITY_ROUNDOFF = 64 * float(np.finfo(np.float64).eps)
-
-
-class DataError(ValueError):
-    """Data that give non-finite numbers (an overflow), named with the quantity."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -103,15 +98,17 @@ class Discretization:
         self.constraints = con = problem.constraints
         self.free = con.free
         self.space = space = problem.space
-        assembly = CellAssembly(space, problem.material, problem.stabilization, self.free, con.ties)
+        assembly = cell_assembly(problem)
         #: whether K is kept by the ranks of the MPI job (docs/mpi.md): asked for, and
         #: not under load control, whose anchored K is made from the whole matrix
         self.distributed = distributed and not len(problem.rigid_basis)
-        K: Any
-        if self.distributed:
-            K = self._distributed_blocks(assembly)
-        else:
-            K = self._blocks()
+        blocks = stiffness_blocks(problem, assembly if self.distributed else None)
+        K = blocks.K
+        # the coupling of the free and the constrained dofs: the lifting of prescribed
+        # values, K_fc u_c(t) (none if all are zero), and the reactions, K_cc u_c(t)
+        self._K_fc, self._K_cc = blocks.K_fc, blocks.K_cc
+        self.K_fc = None if con.zero else self._K_fc
+        del blocks
         trace = None
         #: the dimension d: dof i of the vertex values is component i % d
         self.dim = dim = int(space.dim)
@@ -173,69 +170,11 @@ class Discretization:
         #: before it, and a later run that reuses them spends none
         self.timings: dict[str, float] = {"assembly": time.perf_counter() - tick}
 
-    def _blocks(self) -> sp.csr_matrix:
-        """K on the free dofs; sets the blocks of the constrained dofs (``K_fc``,
-        ``K_cc``) from the whole matrix, which is not kept."""
-        con = self.constraints
-        K_full = self._stiffness()
-        self._check_finite(K_full)
-        K_rows = K_full[self.free]  # the rows of the free dofs, sliced once
-        K = K_rows[:, self.free].tocsr()
-        # the coupling of the free and the constrained dofs: the lifting of prescribed
-        # values, K_fc u_c(t) (none if all are zero), and the reactions, K_cc u_c(t)
-        self._K_fc = K_rows[:, con.dofs].tocsr()
-        self.K_fc = None if con.zero else self._K_fc
-        self._K_cc = sp.csr_matrix((0, 0)) if con.zero else K_full[con.dofs][:, con.dofs].tocsr()
-        # the whole matrix is not kept: a run solves with these blocks (in 3D it is as
-        # large as the free block, a tenth of the factors); :attr:`K_full` makes it again
-        return K
-
-    def _distributed_blocks(self, assembly: CellAssembly) -> Any:
-        """K kept by the MPI ranks (:class:`~vemwear.solvers.backends.petsc_operator.
-        PetscStiffness`); the blocks of the constrained dofs and K's rows at the contact
-        dofs from the cells that touch them alone (their rows and columns there are
-        bitwise those of the whole matrix: :meth:`.cellparts.CellAssembly.around`)."""
-        from ..solvers.backends.petsc_operator import PetscStiffness
-
-        con, cb = self.constraints, self.contact
-        if cb.trace is None:
-            contact = (int(self.space.dim) * cb.nodes[:, None] + np.arange(self.space.dim)).ravel()
-        else:
-            contact = _unique(sp.csr_matrix(cb.trace).indices)
-        near = assembly.around(np.union1d(contact, con.dofs))
-        self._check_finite(near)
-        index = -np.ones(self.n_dof, dtype=np.int64)
-        index[self.free] = np.arange(len(self.free))
-        at = index[contact]
-        at = _unique(at[at >= 0])  # the free contact dofs, increasing
-        near_rows = near[self.free]
-        self._K_fc = near_rows[:, con.dofs].tocsr()
-        self.K_fc = None if con.zero else self._K_fc
-        self._K_cc = sp.csr_matrix((0, 0)) if con.zero else near[con.dofs][:, con.dofs].tocsr()
-        rows = near_rows[at][:, self.free].tocsr()
-        del near, near_rows
-        return PetscStiffness(assembly, at, rows)
-
-    def _check_finite(self, K: sp.csr_matrix) -> None:
-        if not np.all(np.isfinite(K.data)):
-            mat = self.problem.material
-            raise DataError(
-                f"[material] lam = {mat.lam:g}, eta = {mat.eta:g} give a stiffness matrix with "
-                "non-finite entries (an overflow); use values of a sensible scale"
-            )
-
-    def _stiffness(self) -> sp.csr_matrix:
-        """The stiffness on all dofs, with the rigid parts' ties (docs/method.md 1d)."""
-        con = self.constraints
-        with np.errstate(all="ignore"):
-            K = self.space.stiffness(self.problem.material, self.problem.stabilization)
-            return K if con.ties is None else con.ties.tie(K)  # Q^T K Q
-
     @functools.cached_property
     def K_full(self) -> sp.csr_matrix:
         """The stiffness on all dofs (free and constrained), assembled again when asked:
         a run keeps only the blocks it uses (``system.K``, ``K_fc``, ``K_cc``)."""
-        return self._stiffness()
+        return whole_stiffness(self.problem)
 
     def take_timings(self) -> dict[str, float]:
         """The phases of :attr:`timings` spent since the last call (then forgotten)."""
