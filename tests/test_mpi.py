@@ -458,6 +458,7 @@ for name, call in (
     ("pardiso", lambda: schur_factorize(s.K, s.contact_cols, s.dof_points, "scipy")),
     ("factorize", lambda: factorize(s.K)),
     ("rows", lambda: s.K.rows([s.K.shape[0] - 1])),  # a dof at the top
+    ("resultants", lambda: d.resultants_run([], [], None)),  # no step solver
 ):
     try:
         call()
@@ -472,7 +473,7 @@ def test_what_needs_the_whole_stiffness_is_refused_in_one_line(tmp_path: Path) -
     """With K kept by the ranks (here one process, no mpirun), what would need the
     whole matrix on rank 0 is refused with one line naming the way: the smallness
     estimate without the run's step solver, a factorization by another backend, the
-    rows that rank 0 does not hold."""
+    rows that rank 0 does not hold, the reactions without the run's step solver."""
     _need_mpi()
     cfg = tmp_path / "c.toml"
     cfg.write_text(CONFIG_2D)
@@ -485,6 +486,7 @@ def test_what_needs_the_whole_stiffness_is_refused_in_one_line(tmp_path: Path) -
     assert "factorized by the petsc backend, not 'scipy'" in said["pardiso"]
     assert "condensed Newton (method 'newton') only" in said["factorize"]
     assert "kept by the MPI ranks, not on rank 0" in said["rows"]
+    assert "give the step solver whose factorization solves with it" in said["resultants"]
     assert all("\n" not in line for line in said.values())
 
 
