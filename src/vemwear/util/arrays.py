@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["isin", "unique"]
+__all__ = ["isin", "members", "unique"]
 
 
 def unique(a: ArrayLike) -> NDArray[Any]:
@@ -38,3 +38,11 @@ def isin(a: ArrayLike, values: ArrayLike) -> NDArray[np.bool_]:
     i = np.searchsorted(s, x)
     np.minimum(i, s.size - 1, out=i)
     return np.asarray(s[i] == x)
+
+
+def members(ids: ArrayLike, n: int) -> NDArray[np.bool_]:
+    """Whether each of ``0, ..., n - 1`` is one of ``ids``, (n,): the mask of a subset
+    (e.g. the cells one MPI rank assembles)."""
+    out = np.zeros(n, dtype=bool)
+    out[np.asarray(ids, dtype=np.int64)] = True
+    return out

@@ -10,6 +10,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..mesh.polymesh import Mesh
+from ..util.arrays import members
 from .local import STABILIZATIONS, Material, element_matrices, triangle_matrices
 from .quadrature import GAUSS2, Field, cell_means, eval_field
 
@@ -83,8 +84,7 @@ def _chosen(
     """The groups' vertex ids, of the ``cells`` only when given."""
     if cells is None:
         return [(n, verts) for n, (_ids, verts) in groups.items()]
-    keep = np.zeros(n_cells, dtype=bool)
-    keep[np.asarray(cells, dtype=np.int64)] = True
+    keep = members(cells, n_cells)
     return [(n, verts[keep[ids]]) for n, (ids, verts) in groups.items()]
 
 

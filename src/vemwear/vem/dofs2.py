@@ -23,6 +23,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polymesh import Mesh
+from ..util.arrays import members
 from ..util.arrays import unique as _unique
 from .local import Material
 from .local2 import (
@@ -294,8 +295,7 @@ def stiffness2(
     ndof = num.n_dofs
     groups = _cell_nodes(mesh)
     if cells is not None:
-        keep = np.zeros(mesh.n_cells, dtype=bool)
-        keep[np.asarray(cells, dtype=np.int64)] = True
+        keep = members(cells, mesh.n_cells)
         chosen = [keep[ids] for ids, _verts in mesh.groups.values()]
         groups = [(v[k], nod[k]) for (v, nod), k in zip(groups, chosen, strict=True)]
         groups = [g for g in groups if len(g[0])]

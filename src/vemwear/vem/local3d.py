@@ -38,6 +38,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from ..mesh.polyhedra import Mesh3D
+from ..util.arrays import members
 from ..util.arrays import unique as _unique
 from .local import STABILIZATIONS, Material
 from .quadrature3d import (
@@ -288,8 +289,7 @@ def stiffness3d(
     nv = mesh.n_points
     groups = cg.groups()
     if cells is not None:
-        keep = np.zeros(len(cg.sizes), dtype=bool)
-        keep[np.asarray(cells, dtype=np.int64)] = True
+        keep = members(cells, len(cg.sizes))
         groups = {n: (ids[keep[ids]], sl[keep[ids]]) for n, (ids, sl) in groups.items()}
     total = int(sum(len(ids) * n * n for n, (ids, _sl) in groups.items()))
     keys = np.empty(total, dtype=np.int64)  # row vertex * nv + column vertex
